@@ -1,0 +1,411 @@
+"""Robot models: a URDF loaded into Pinocchio, with nominal M, C, g and per-link inertial data.
+
+All rigid-body math is Pinocchio's. This module adds what the controller needs on top:
+
+* joint coordinates as *angles* (a continuous joint, two numbers ``cos, sin`` in Pinocchio, is one
+  angle here), so every vector handed to a controller has length ``dof = model.nv``;
+* the inertial data of every URDF link, kept separately even when Pinocchio merges links joined by
+  fixed joints into one body, so that an uncertainty box can be stated per URDF link;
+* copies with other link inertias or an attached payload (the "true plant").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from .catalog import resolve_robot
+from .errors import InputError, did_you_mean
+
+#: Pinocchio joint models accepted (fixed joints are merged away by the URDF parser).
+_SUPPORTED = {
+    "JointModelRX": "revolute",
+    "JointModelRY": "revolute",
+    "JointModelRZ": "revolute",
+    "JointModelRevoluteUnaligned": "revolute",
+    "JointModelRUBX": "continuous",
+    "JointModelRUBY": "continuous",
+    "JointModelRUBZ": "continuous",
+    "JointModelRevoluteUnboundedUnaligned": "continuous",
+    "JointModelPX": "prismatic",
+    "JointModelPY": "prismatic",
+    "JointModelPZ": "prismatic",
+    "JointModelPrismaticUnaligned": "prismatic",
+}
+_URDF_SUPPORTED = ("revolute", "continuous", "prismatic", "fixed")
+
+
+@dataclass(frozen=True)
+class LinkInertial:
+    """Inertial data of one URDF link, and where Pinocchio attached it.
+
+    Attributes:
+        name: URDF link name.
+        joint_index: Index of the Pinocchio joint whose body carries the link (0: the fixed base).
+        placement: Pose of the link frame in that joint's frame.
+        inertia: Spatial inertia of the link expressed in the link frame (mass [kg], center of
+            mass in the link frame [m], rotational inertia about the center of mass [kg m^2]).
+    """
+
+    name: str
+    joint_index: int
+    placement: pin.SE3
+    inertia: pin.Inertia
+
+    @property
+    def parameters(self) -> np.ndarray:
+        """The 10 standard parameters in the link frame, Pinocchio order
+        ``[m, m c_x, m c_y, m c_z, I_xx, I_xy, I_yy, I_xz, I_yz, I_zz]`` (about the link origin)."""
+        return np.asarray(self.inertia.toDynamicParameters()).copy()
+
+
+class Robot:
+    """A fixed-base robot arm: a Pinocchio model plus per-link inertial data.
+
+    Use :func:`load_robot` to make one. Vectors ``q`` [rad or m], ``qd`` [rad/s or m/s] have
+    length :attr:`dof`. ``M``, ``C``, ``g`` are the joint-space inertia matrix [kg m^2], the
+    Christoffel-consistent Coriolis matrix (``Mdot - 2 C`` is skew) and the gravity torque [N m].
+
+    Attributes:
+        model: The Pinocchio model (treat it as read-only; use :meth:`with_link_inertias`).
+        name: Robot name (the URDF's, or the built-in name).
+        urdf_path: The URDF the model was built from.
+        links: Inertial data of every URDF link attached to a moving or fixed body.
+    """
+
+    def __init__(
+        self,
+        model: pin.Model,
+        links: Sequence[LinkInertial],
+        name: str,
+        urdf_path: Path,
+        locked_joints: Mapping[str, float] | None = None,
+    ):
+        self.model = model
+        self.data = model.createData()
+        self.name = name
+        self.urdf_path = Path(urdf_path)
+        self.links = tuple(links)
+        self.locked_joints = dict(locked_joints or {})
+        self._link_by_name = {link.name: link for link in self.links}
+        kinds = []
+        for j in range(1, model.njoints):
+            shortname = model.joints[j].shortname()
+            if shortname not in _SUPPORTED:
+                raise InputError(
+                    f"joint '{model.names[j]}' has type {shortname}; urpc supports fixed-base arms "
+                    "with revolute, continuous and prismatic joints",
+                    source=urdf_path,
+                    field=f"joint.{model.names[j]}",
+                )
+            kinds.append(_SUPPORTED[shortname])
+        self.joint_kinds = tuple(kinds)
+        self._continuous = [
+            (model.joints[j].idx_q, model.joints[j].idx_v)
+            for j in range(1, model.njoints)
+            if _SUPPORTED[model.joints[j].shortname()] == "continuous"
+        ]
+        self._simple = not self._continuous
+
+    # ----------------------------------------------------------------------------- description
+    @property
+    def dof(self) -> int:
+        """Number of joint coordinates (angles or positions) seen by controllers."""
+        return self.model.nv
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return tuple(self.model.names[j] for j in range(1, self.model.njoints))
+
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        return tuple(link.name for link in self.links)
+
+    @property
+    def moving_link_names(self) -> tuple[str, ...]:
+        """Links carried by a joint (their inertia enters the dynamics)."""
+        return tuple(link.name for link in self.links if link.joint_index > 0)
+
+    @property
+    def position_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper joint limits [rad or m]; continuous joints are unbounded (inf)."""
+        lower = np.full(self.dof, -np.inf)
+        upper = np.full(self.dof, np.inf)
+        for j in range(1, self.model.njoints):
+            joint = self.model.joints[j]
+            if joint.nq == joint.nv:
+                lower[joint.idx_v] = self.model.lowerPositionLimit[joint.idx_q]
+                upper[joint.idx_v] = self.model.upperPositionLimit[joint.idx_q]
+        return lower, upper
+
+    @property
+    def velocity_limit(self) -> np.ndarray:
+        """Joint velocity limits from the URDF [rad/s or m/s]."""
+        return np.asarray(self.model.velocityLimit).copy()
+
+    @property
+    def effort_limit(self) -> np.ndarray:
+        """Joint effort limits from the URDF [N m or N]."""
+        return np.asarray(self.model.effortLimit).copy()
+
+    def link(self, name: str) -> LinkInertial:
+        """Inertial data of a URDF link by name."""
+        try:
+            return self._link_by_name[name]
+        except KeyError:
+            raise InputError(
+                f"unknown link '{name}' of robot '{self.name}'; " + did_you_mean(name, self.link_names),
+                source=self.urdf_path,
+            ) from None
+
+    @property
+    def nominal_parameters(self) -> np.ndarray:
+        """Stacked standard parameters of the moving bodies, ``10 * dof``-vector (Pinocchio order,
+        body ``j`` about its joint frame), the column order of Pinocchio's regressors."""
+        return np.concatenate(
+            [self.model.inertias[j].toDynamicParameters() for j in range(1, self.model.njoints)]
+        )
+
+    def __repr__(self) -> str:
+        return f"Robot({self.name!r}, dof={self.dof}, joints={list(self.joint_names)})"
+
+    # ----------------------------------------------------------------------------- dynamics
+    def configuration(self, q: np.ndarray) -> np.ndarray:
+        """Pinocchio configuration vector (length ``model.nq``) for joint angles ``q`` (length
+        ``dof``): continuous joints become ``(cos, sin)``."""
+        if self._simple:
+            return q
+        config = np.empty(self.model.nq)
+        q_idx, v_idx = self._v_to_q_index()
+        config[q_idx] = q[v_idx]
+        for idx_q, idx_v in self._continuous:
+            config[idx_q] = np.cos(q[idx_v])
+            config[idx_q + 1] = np.sin(q[idx_v])
+        return config
+
+    def _v_to_q_index(self) -> tuple[np.ndarray, np.ndarray]:
+        if not hasattr(self, "_v_to_q"):
+            q_idx, v_idx = [], []
+            for j in range(1, self.model.njoints):
+                joint = self.model.joints[j]
+                if joint.nq == joint.nv:
+                    q_idx.extend(range(joint.idx_q, joint.idx_q + joint.nq))
+                    v_idx.extend(range(joint.idx_v, joint.idx_v + joint.nv))
+            self._v_to_q = (np.array(q_idx, dtype=int), np.array(v_idx, dtype=int))
+        return self._v_to_q
+
+    def angles(self, configuration: np.ndarray) -> np.ndarray:
+        """Joint angles (length ``dof``) of a Pinocchio configuration (inverse of
+        :meth:`configuration`)."""
+        if self._simple:
+            return np.asarray(configuration, dtype=float).copy()
+        q = np.empty(self.dof)
+        q_idx, v_idx = self._v_to_q_index()
+        q[v_idx] = configuration[q_idx]
+        for idx_q, idx_v in self._continuous:
+            q[idx_v] = np.arctan2(configuration[idx_q + 1], configuration[idx_q])
+        return q
+
+    def M(self, q: np.ndarray) -> np.ndarray:
+        """Joint-space inertia matrix ``M(q)`` [kg m^2], symmetric, ``dof x dof``."""
+        M = pin.crba(self.model, self.data, self.configuration(q))
+        return np.triu(M) + np.triu(M, 1).T
+
+    def C(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """Christoffel-consistent Coriolis matrix ``C(q, qd)`` [kg m^2/s] (``Mdot - 2C`` skew)."""
+        return pin.computeCoriolisMatrix(self.model, self.data, self.configuration(q), qd).copy()
+
+    def g(self, q: np.ndarray) -> np.ndarray:
+        """Generalized gravity torque ``g(q)`` [N m or N]."""
+        return pin.computeGeneralizedGravity(self.model, self.data, self.configuration(q)).copy()
+
+    def inverse_dynamics(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        """``M(q) qdd + C(q, qd) qd + g(q)`` [N m or N] (Pinocchio RNEA)."""
+        return pin.rnea(self.model, self.data, self.configuration(q), qd, qdd).copy()
+
+    def forward_dynamics(self, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Joint accelerations [rad/s^2 or m/s^2] under torque ``tau`` (Pinocchio ABA)."""
+        return pin.aba(self.model, self.data, self.configuration(q), qd, tau).copy()
+
+    # ----------------------------------------------------------------------------- copies
+    def with_link_inertias(self, inertias: Mapping[str, pin.Inertia]) -> Robot:
+        """A copy whose named links have other inertias (each in its link frame).
+
+        This is how a "true plant" is made: the same kinematics, other inertial parameters.
+        """
+        for name in inertias:
+            self.link(name)  # raises on an unknown name
+        links = [
+            LinkInertial(lk.name, lk.joint_index, lk.placement, inertias.get(lk.name, lk.inertia))
+            for lk in self.links
+        ]
+        return self._rebuilt(links)
+
+    def with_payload(self, name: str, link: str, inertia: pin.Inertia) -> Robot:
+        """A copy with an extra rigid body ``name`` fixed to ``link`` (inertia in that link's
+        frame). The payload is then a link like any other (it can be uncertain)."""
+        if name in self._link_by_name:
+            raise InputError(f"a link named '{name}' already exists on robot '{self.name}'")
+        parent = self.link(link)
+        payload = LinkInertial(name, parent.joint_index, parent.placement, inertia)
+        return self._rebuilt([*self.links, payload])
+
+    def _rebuilt(self, links: Sequence[LinkInertial]) -> Robot:
+        model = self.model.copy()
+        for j in range(model.njoints):
+            model.inertias[j] = _body_inertia(links, j)
+        return Robot(model, links, self.name, self.urdf_path, self.locked_joints)
+
+
+def _body_inertia(links: Sequence[LinkInertial], joint_index: int) -> pin.Inertia:
+    total = pin.Inertia.Zero()
+    for link in links:
+        if link.joint_index == joint_index:
+            total += link.placement.act(link.inertia)
+    return total
+
+
+def load_robot(
+    source: str | Path, locked_joints: Sequence[str] | Mapping[str, float] = ()
+) -> Robot:
+    """Load a fixed-base robot arm from a URDF path, a built-in name or an example-robot-data name.
+
+    Args:
+        source: A URDF file, a built-in robot (``rr_planar``) or an example-robot-data URDF name
+            (``ur5``, ``panda``, ...); ``urpc robots`` lists the names.
+        locked_joints: Joints to lock (removed from the model), by name; a mapping gives the
+            locked position [rad or m], a sequence locks them at 0 (clipped into their limits).
+
+    Raises:
+        InputError: unknown robot, malformed URDF, unsupported joint type, unknown locked joint,
+            non-physical inertia in the URDF.
+    """
+    entry = resolve_robot(source)
+    urdf_links = _read_urdf_inertials(entry.urdf)
+    try:
+        model = pin.buildModelFromUrdf(str(entry.urdf))
+    except Exception as exc:  # Pinocchio raises plain RuntimeError/ValueError on bad XML
+        raise InputError(f"Pinocchio cannot parse this URDF: {exc}", source=entry.urdf) from None
+    if isinstance(locked_joints, Mapping):
+        locked = {str(k): float(v) for k, v in locked_joints.items()}
+    else:
+        locked = {str(name): 0.0 for name in locked_joints}
+    if locked:
+        model = _lock_joints(model, locked, entry.urdf)
+    if model.nv == 0:
+        raise InputError("the robot has no moving joint", source=entry.urdf, field="joint")
+    links = []
+    for frame in model.frames:
+        if frame.type == pin.FrameType.BODY and frame.name in urdf_links:
+            links.append(
+                LinkInertial(frame.name, frame.parentJoint, frame.placement, urdf_links[frame.name])
+            )
+    name = entry.name if entry.origin != "file" else (model.name or entry.name)
+    robot = Robot(model, links, name, entry.urdf, locked)
+    _check_bodies(robot)
+    return robot
+
+
+def _lock_joints(model: pin.Model, locked: Mapping[str, float], urdf: Path) -> pin.Model:
+    names = [model.names[j] for j in range(1, model.njoints)]
+    reference = pin.neutral(model)
+    ids = []
+    for name, value in locked.items():
+        if name not in names:
+            raise InputError(
+                f"cannot lock unknown joint '{name}'; " + did_you_mean(name, names),
+                source=urdf,
+                field="locked_joints",
+            )
+        j = model.getJointId(name)
+        joint = model.joints[j]
+        if joint.nq != 1:
+            raise InputError(f"only 1-dof joints can be locked, not '{name}'", source=urdf)
+        lo, hi = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
+        reference[joint.idx_q] = min(max(value, lo), hi)
+        ids.append(j)
+    return pin.buildReducedModel(model, ids, reference)
+
+
+def _read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
+    """Per-link inertias from the URDF (yourdfpy), in link frames, with joint-type checks."""
+    import yourdfpy
+
+    try:
+        urdf = yourdfpy.URDF.load(
+            str(path), load_meshes=False, build_scene_graph=False, load_collision_meshes=False
+        )
+    except Exception as exc:
+        raise InputError(f"not a readable URDF ({exc})", source=path) from None
+    if urdf.robot is None or not urdf.robot.links:
+        raise InputError("the URDF defines no link", source=path)
+    for joint in urdf.robot.joints:
+        if joint.type not in _URDF_SUPPORTED:
+            raise InputError(
+                f"joint '{joint.name}' has type '{joint.type}'; urpc supports fixed-base arms with "
+                f"joint types {', '.join(_URDF_SUPPORTED)}",
+                source=path,
+                field=f"joint.{joint.name}.type",
+            )
+    inertias = {}
+    for link in urdf.robot.links:
+        inertial = link.inertial
+        if inertial is None:
+            inertias[link.name] = pin.Inertia.Zero()
+            continue
+        mass = float(inertial.mass if inertial.mass is not None else 0.0)
+        origin = np.eye(4) if inertial.origin is None else np.asarray(inertial.origin, dtype=float)
+        tensor = np.zeros((3, 3)) if inertial.inertia is None else np.asarray(inertial.inertia)
+        rotated = origin[:3, :3] @ tensor @ origin[:3, :3].T
+        field = f"link.{link.name}.inertial"
+        if not np.isfinite(mass) or mass < 0:
+            raise InputError(f"mass {mass} must be a finite number >= 0 [kg]", source=path, field=field)
+        problem = inertia_problem(rotated)
+        if problem:
+            raise InputError(f"non-physical inertia: {problem}", source=path, field=field)
+        inertias[link.name] = pin.Inertia(mass, origin[:3, 3].copy(), rotated)
+    return inertias
+
+
+def inertia_problem(inertia_at_com: np.ndarray, tolerance: float = 1e-12) -> str | None:
+    """Why a rotational inertia about the center of mass [kg m^2] is not physical, or ``None``.
+
+    Physical means symmetric positive semi-definite with principal moments satisfying the triangle
+    inequality (``I1 + I2 >= I3`` and permutations).
+    """
+    tensor = np.asarray(inertia_at_com, dtype=float)
+    if not np.all(np.isfinite(tensor)):
+        return "it has non-finite entries"
+    if not np.allclose(tensor, tensor.T, atol=tolerance):
+        return "it is not symmetric"
+    moments = np.linalg.eigvalsh(tensor)
+    scale = max(1.0, float(np.abs(moments).max())) * 1e-9
+    if moments[0] < -scale:
+        return f"it is not positive semi-definite (principal moments {np.round(moments, 6).tolist()})"
+    if moments[0] + moments[1] < moments[2] - scale:
+        return (
+            "its principal moments violate the triangle inequality I1 + I2 >= I3 "
+            f"({np.round(moments, 6).tolist()})"
+        )
+    return None
+
+
+def _check_bodies(robot: Robot) -> None:
+    """Every joint must move some mass, otherwise ``M(q)`` is singular."""
+    model = robot.model
+    M = robot.M(robot.angles(pin.neutral(model)))
+    try:
+        np.linalg.cholesky(M)
+    except np.linalg.LinAlgError:
+        diagonal = np.diag(M)
+        j = int(np.argmin(diagonal))
+        raise InputError(
+            f"joint '{robot.joint_names[j]}' moves no mass or inertia, so M(q) is singular: give the "
+            "links it carries an <inertial> with positive mass and inertia",
+            source=robot.urdf_path,
+            field=f"joint.{robot.joint_names[j]}",
+        ) from None
