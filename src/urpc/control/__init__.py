@@ -1,0 +1,1 @@
+"""Controllers: the interval passivity controller, the r-alpha baseline, computed torque."""
