@@ -158,7 +158,8 @@ class Robot:
             return self._link_by_name[name]
         except KeyError:
             raise InputError(
-                f"unknown link '{name}' of robot '{self.name}'; " + did_you_mean(name, self.link_names),
+                f"unknown link '{name}' of robot '{self.name}'; "
+                + did_you_mean(name, self.link_names),
                 source=self.urdf_path,
             ) from None
 
@@ -333,7 +334,17 @@ def _lock_joints(model: pin.Model, locked: Mapping[str, float], urdf: Path) -> p
 
 def _read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
     """Per-link inertias from the URDF (yourdfpy), in link frames, with joint-type checks."""
+    import xml.etree.ElementTree as ElementTree
+
     import yourdfpy
+
+    # Check well-formedness first: the C++ URDF parser prints its own lines on stderr otherwise.
+    try:
+        ElementTree.parse(path)
+    except ElementTree.ParseError as exc:
+        raise InputError(f"malformed XML ({exc})", source=path) from None
+    except OSError as exc:
+        raise InputError(f"cannot read the file ({exc})", source=path) from None
 
     try:
         urdf = yourdfpy.URDF.load(
@@ -363,15 +374,22 @@ def _read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
         rotated = origin[:3, :3] @ tensor @ origin[:3, :3].T
         field = f"link.{link.name}.inertial"
         if not np.isfinite(mass) or mass < 0:
-            raise InputError(f"mass {mass} must be a finite number >= 0 [kg]", source=path, field=field)
-        problem = inertia_problem(rotated)
+            raise InputError(
+                f"mass {mass} must be a finite number >= 0 [kg]", source=path, field=field
+            )
+        # Real URDFs often carry tiny triangle-inequality violations on massless frames, so only
+        # an inertia that is not positive semi-definite is refused here; the uncertainty file
+        # checks the full physical consistency of the links it makes uncertain.
+        problem = inertia_problem(rotated, triangle=False)
         if problem:
             raise InputError(f"non-physical inertia: {problem}", source=path, field=field)
         inertias[link.name] = pin.Inertia(mass, origin[:3, 3].copy(), rotated)
     return inertias
 
 
-def inertia_problem(inertia_at_com: np.ndarray, tolerance: float = 1e-12) -> str | None:
+def inertia_problem(
+    inertia_at_com: np.ndarray, tolerance: float = 1e-12, triangle: bool = True
+) -> str | None:
     """Why a rotational inertia about the center of mass [kg m^2] is not physical, or ``None``.
 
     Physical means symmetric positive semi-definite with principal moments satisfying the triangle
@@ -385,8 +403,10 @@ def inertia_problem(inertia_at_com: np.ndarray, tolerance: float = 1e-12) -> str
     moments = np.linalg.eigvalsh(tensor)
     scale = max(1.0, float(np.abs(moments).max())) * 1e-9
     if moments[0] < -scale:
-        return f"it is not positive semi-definite (principal moments {np.round(moments, 6).tolist()})"
-    if moments[0] + moments[1] < moments[2] - scale:
+        return (
+            f"it is not positive semi-definite (principal moments {np.round(moments, 6).tolist()})"
+        )
+    if triangle and moments[0] + moments[1] < moments[2] - scale:
         return (
             "its principal moments violate the triangle inequality I1 + I2 >= I3 "
             f"({np.round(moments, 6).tolist()})"

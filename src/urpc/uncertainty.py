@@ -170,9 +170,14 @@ class ParameterBox:
         robot = self.nominal_robot(robot)
         if not point:
             return robot
+        boxed = {b.link: b for b in self.links}
         inertias = {}
         for name, values in point.items():
-            inertias[name] = self.link_box(name).inertia(np.asarray(values, dtype=float))
+            values = np.asarray(values, dtype=float)
+            # Links without a box are given in physical coordinates.
+            inertias[name] = (
+                boxed[name].inertia(values) if name in boxed else inertia_from_physical(values)
+            )
         return robot.with_link_inertias(inertias)
 
     def vertex(self, index: int) -> dict[str, np.ndarray]:
@@ -327,7 +332,9 @@ def _parse_payload(doc: Any, robot: Robot, source: str | None) -> tuple[Payload,
             lo, hi = _interval(entry[key], None, source, f"payload.{key}")
             center[k] = 0.5 * (lo + hi)
     if "mass" not in entry:
-        raise InputError("a payload needs a mass interval [kg]", source=source, field="payload.mass")
+        raise InputError(
+            "a payload needs a mass interval [kg]", source=source, field="payload.mass"
+        )
     box = _parse_link_box(
         entry, name, inertia_from_physical(center), source, "payload", allow_zero_mass=True
     )
@@ -364,7 +371,12 @@ def _parse_link_box(
     else:
         _check_keys(entry, (*PHYSICAL_FIELDS, "barycentric"), source, f"{prefix}.")
         kind = "physical"
-        keys, values, doc, fprefix = PHYSICAL_FIELDS, physical_coordinates(nominal_inertia), entry, prefix
+        keys, values, doc, fprefix = (
+            PHYSICAL_FIELDS,
+            physical_coordinates(nominal_inertia),
+            entry,
+            prefix,
+        )
     lower, upper = values.copy(), values.copy()
     for k, key in enumerate(keys):
         if key in doc:
@@ -531,7 +543,9 @@ def _check_keys(doc: Mapping, valid: tuple[str, ...], source: str | None, prefix
 
 
 # ============================================================================ parameter points
-def load_parameter_point(path: str | Path, robot: Robot, box: ParameterBox) -> dict[str, np.ndarray]:
+def load_parameter_point(
+    path: str | Path, robot: Robot, box: ParameterBox
+) -> dict[str, np.ndarray]:
     """Read a parameter-point file (a true plant) for ``robot`` and ``box``.
 
     The file uses the names of the uncertainty format, with single numbers::
@@ -555,9 +569,7 @@ def load_parameter_point(path: str | Path, robot: Robot, box: ParameterBox) -> d
     _require_mapping(entries, source, "links")
     if document.get("payload") is not None:
         if not box.payloads:
-            raise InputError(
-                "this uncertainty box has no payload", source=source, field="payload"
-            )
+            raise InputError("this uncertainty box has no payload", source=source, field="payload")
         entries[box.payloads[0].name] = document["payload"]
     for name, values in entries.items():
         name = str(name)
@@ -606,6 +618,8 @@ def outside_box(box: ParameterBox, point: Mapping[str, np.ndarray]) -> list[str]
             link_box = box.link_box(name)
         except KeyError:
             continue
-        for k in np.flatnonzero((values < link_box.lower - 1e-12) | (values > link_box.upper + 1e-12)):
+        for k in np.flatnonzero(
+            (values < link_box.lower - 1e-12) | (values > link_box.upper + 1e-12)
+        ):
             outside.append(f"{name}.{link_box.fields[k]}")
     return outside

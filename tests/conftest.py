@@ -1,0 +1,54 @@
+"""Shared fixtures: robots are loaded once per test session (loading parses URDFs)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from urpc.robot import load_robot
+from urpc.uncertainty import load_parameter_point, load_uncertainty
+
+ROOT = Path(__file__).resolve().parents[1]
+RR_DIR = ROOT / "robots" / "rr_planar"
+PANDA_FINGERS = ["panda_finger_joint1", "panda_finger_joint2"]
+
+
+@pytest.fixture(scope="session")
+def rr():
+    return load_robot("rr_planar")
+
+
+@pytest.fixture(scope="session")
+def rr_box(rr):
+    return load_uncertainty(RR_DIR / "uncertainty.yaml", rr)
+
+
+@pytest.fixture(scope="session")
+def rr_true_point(rr, rr_box):
+    return load_parameter_point(RR_DIR / "true_parameters.yaml", rr, rr_box)
+
+
+@pytest.fixture(scope="session")
+def ur5():
+    return load_robot("ur5")
+
+
+@pytest.fixture(scope="session")
+def panda():
+    return load_robot("panda", locked_joints=PANDA_FINGERS)
+
+
+def rr_closed_form(q, qd, m2, lc2, I2, m1=10.0, lc1=0.5, I1=10 / 12, l1=1.0, g0=9.81):
+    """The textbook RR arm (Spong et al. Sec. 7.4), written independently of Pinocchio:
+    returns M, C (Christoffel), g."""
+    c2 = np.cos(q[1])
+    M11 = m1 * lc1**2 + m2 * (l1**2 + lc2**2 + 2 * l1 * lc2 * c2) + I1 + I2
+    M12 = m2 * (lc2**2 + l1 * lc2 * c2) + I2
+    M22 = m2 * lc2**2 + I2
+    h = -m2 * l1 * lc2 * np.sin(q[1])
+    C = np.array([[h * qd[1], h * (qd[0] + qd[1])], [-h * qd[0], 0.0]])
+    g1 = (m1 * lc1 + m2 * l1) * g0 * np.cos(q[0]) + m2 * lc2 * g0 * np.cos(q[0] + q[1])
+    g2 = m2 * lc2 * g0 * np.cos(q[0] + q[1])
+    return np.array([[M11, M12], [M12, M22]]), C, np.array([g1, g2])

@@ -1,0 +1,148 @@
+"""Robot models: Pinocchio's M, C, g against independent references, loading and copies."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from conftest import PANDA_FINGERS, rr_closed_form
+
+from urpc.errors import InputError
+from urpc.robot import load_robot
+from urpc.uncertainty import inertia_from_physical
+
+
+def test_rr_arm_matches_textbook_model_inside_the_box(rr, rr_box):
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        q, qd = rng.uniform(-np.pi, np.pi, 2), rng.normal(size=2) * 3
+        m2, lc2, I2 = rng.uniform(5, 10), rng.uniform(0.5, 0.525), rng.uniform(5 / 12, 20 / 12)
+        values = rr_box.link_box("link2").nominal.copy()
+        values[[0, 1, 6]] = m2, lc2, I2  # mass, com_x, iyy
+        plant = rr_box.plant(rr, {"link2": values})
+        M, C, g = rr_closed_form(q, qd, m2, lc2, I2)
+        np.testing.assert_allclose(plant.M(q), M, atol=1e-10, rtol=0)
+        np.testing.assert_allclose(plant.C(q, qd), C, atol=1e-10, rtol=0)
+        np.testing.assert_allclose(plant.g(q), g, atol=1e-10, rtol=0)
+
+
+def test_christoffel_property_mdot_minus_2c_is_skew(ur5):
+    rng = np.random.default_rng(1)
+    q, qd = rng.normal(size=6), rng.normal(size=6)
+    h = 1e-6
+    Mdot = (ur5.M(q + h * qd) - ur5.M(q - h * qd)) / (2 * h)
+    N = Mdot - 2 * ur5.C(q, qd)
+    np.testing.assert_allclose(N + N.T, 0, atol=1e-6)
+
+
+def test_example_robot_data_arms_load(ur5, panda):
+    assert ur5.dof == 6 and panda.dof == 7
+    assert "panda_finger_joint1" not in panda.joint_names
+    # The fingers' mass is carried by joint 7 after locking.
+    hand_mass = sum(link.inertia.mass for link in panda.links if link.joint_index == 7)
+    assert np.isclose(panda.model.inertias[7].mass, hand_mass)
+    full = load_robot("panda")
+    assert full.dof == 9
+
+
+def test_link_inertias_sum_to_pinocchio_bodies(panda):
+    # Pinocchio merged links joined by fixed joints; the per-link data must add up to its bodies.
+    for j in range(1, panda.model.njoints):
+        total = pin.Inertia.Zero()
+        for link in panda.links:
+            if link.joint_index == j:
+                total += link.placement.act(link.inertia)
+        np.testing.assert_allclose(
+            total.toDynamicParameters(), panda.model.inertias[j].toDynamicParameters(), atol=1e-12
+        )
+
+
+def test_true_plant_copy_changes_only_its_link(rr):
+    heavy = rr.with_link_inertias(
+        {"link2": inertia_from_physical([10, 0.525, 0, 0, 1, 0, 1, 0, 0, 1])}
+    )
+    assert heavy.link("link2").inertia.mass == 10 and rr.link("link2").inertia.mass == 5
+    assert heavy.model.inertias[1] == rr.model.inertias[1]
+
+
+def test_payload_adds_its_mass_to_the_gravity_torque(rr):
+    q = np.zeros(2)
+    payload = pin.Inertia(2.0, np.array([0.3, 0.0, 0.0]), np.eye(3) * 1e-3)
+    loaded = rr.with_payload("payload", "link2", payload)
+    # The payload sits 0.3 m along link 2 (1.3 m from joint 1): gravity torques grow by m g0 x.
+    np.testing.assert_allclose(loaded.g(q) - rr.g(q), [2 * 9.81 * 1.3, 2 * 9.81 * 0.3], atol=1e-12)
+
+
+def test_continuous_joints_are_angles():
+    robot = load_robot("double_pendulum_continuous")
+    assert robot.joint_kinds == ("continuous", "continuous") and robot.dof == 2
+    q = np.array([0.4, -1.1])
+    config = robot.configuration(q)
+    assert config.shape == (4,)
+    np.testing.assert_allclose(robot.angles(config), q)
+    # Gravity torque is 2 pi periodic in the angles.
+    np.testing.assert_allclose(robot.g(q), robot.g(q + 2 * np.pi), atol=1e-12)
+
+
+def _write(tmp_path, body: str, name="robot.urdf"):
+    path = tmp_path / name
+    path.write_text(body)
+    return path
+
+
+LINK = """<link name="{n}"><inertial><origin xyz="0 0 0.1"/><mass value="{m}"/>
+<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>"""
+
+
+def _urdf(joint_type="revolute", mass=1.0, extra=""):
+    return f"""<robot name="test"><link name="base"/>{LINK.format(n="l1", m=mass)}
+<joint name="j1" type="{joint_type}"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>
+<limit lower="-1" upper="1" effort="10" velocity="1"/></joint>{extra}</robot>"""
+
+
+@pytest.mark.parametrize("joint_type", ["floating", "planar"])
+def test_unsupported_joint_types_are_named(tmp_path, joint_type):
+    with pytest.raises(InputError, match=f"joint 'j1' has type '{joint_type}'"):
+        load_robot(_write(tmp_path, _urdf(joint_type)))
+
+
+def test_malformed_urdf_names_the_file(tmp_path):
+    path = _write(tmp_path, "<robot name='x'><link name='a'></robot")
+    with pytest.raises(InputError, match="robot.urdf"):
+        load_robot(path)
+
+
+def test_missing_file_and_unknown_name():
+    with pytest.raises(InputError, match="does not exist"):
+        load_robot("/nonexistent/arm.urdf")
+    with pytest.raises(InputError, match="did you mean 'panda'"):
+        load_robot("pandaa")
+
+
+def test_joint_moving_no_mass_is_refused(tmp_path):
+    with pytest.raises(InputError, match="joint 'j1' moves no mass"):
+        load_robot(
+            _write(
+                tmp_path,
+                _urdf(mass=0.0)
+                .replace('ixx="0.01"', 'ixx="0"')
+                .replace('iyy="0.01"', 'iyy="0"')
+                .replace('izz="0.01"', 'izz="0"'),
+            )
+        )
+
+
+def test_negative_mass_in_urdf(tmp_path):
+    with pytest.raises(InputError, match="link.l1.inertial"):
+        load_robot(_write(tmp_path, _urdf(mass=-1.0)))
+
+
+def test_unknown_locked_joint_lists_the_joints():
+    with pytest.raises(InputError, match="cannot lock unknown joint 'finger'.*panda_finger_joint1"):
+        load_robot("panda", locked_joints=["finger"])
+
+
+def test_locked_joint_position_is_used():
+    robot = load_robot("panda", locked_joints={name: 0.04 for name in PANDA_FINGERS})
+    assert robot.locked_joints == {name: 0.04 for name in PANDA_FINGERS}
+    assert robot.dof == 7
