@@ -182,17 +182,12 @@ def _cmd_robots(args) -> int:
 
 
 def _load_robot_and_box(args):
-    from .catalog import resolve_robot
+    from .catalog import default_uncertainty
     from .robot import load_robot
     from .uncertainty import ParameterBox, load_uncertainty
 
     robot = load_robot(args.robot, locked_joints=args.lock)
-    path = args.uncertainty
-    if path is None:
-        entry = resolve_robot(args.robot)
-        default = entry.urdf.parent / "uncertainty.yaml"
-        if entry.origin == "built-in" and default.is_file():
-            path = default
+    path = args.uncertainty or default_uncertainty(args.robot)
     if path is None:
         return robot, ParameterBox(links=()), None
     return robot, load_uncertainty(path, robot), path

@@ -71,6 +71,16 @@ def example_robot_data_robots() -> dict[str, RobotEntry]:
     return dict(sorted(robots.items()))
 
 
+def default_uncertainty(source: str | Path) -> Path | None:
+    """The uncertainty file shipped for a robot known by name (``robots/<name>/uncertainty.yaml``,
+    also for example-robot-data arms such as ``ur5`` and ``panda``), or ``None``."""
+    text = str(source)
+    if "/" in text or text.endswith((".urdf", ".xml")):
+        return None
+    path = builtin_root() / text / "uncertainty.yaml"
+    return path if path.is_file() else None
+
+
 def resolve_robot(source: str | Path) -> RobotEntry:
     """Find the URDF behind a robot source (a path or a known name).
 
