@@ -10,8 +10,9 @@ from ..robot import Robot
 from ..uncertainty import ParameterBox
 from .base import BoundMethod
 from .hull import HullBound
+from .rigorous import RigorousBound
 
-METHODS: dict[str, type[BoundMethod]] = {"hull": HullBound}
+METHODS: dict[str, type[BoundMethod]] = {"hull": HullBound, "rigorous": RigorousBound}
 
 
 def make_bound(name: str, robot: Robot, box: ParameterBox) -> BoundMethod:
