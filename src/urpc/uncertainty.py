@@ -25,8 +25,6 @@ iyz, izz`` [kg m^2]. A *barycentric* box bounds the standard parameters about th
 
 from __future__ import annotations
 
-import ast
-import operator
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,6 +35,7 @@ import pinocchio as pin
 import yaml
 
 from .errors import InputError, did_you_mean
+from .expressions import evaluate
 from .robot import Robot, inertia_problem
 
 #: Physical coordinates, stored in this order: mass, CoM in the link frame, inertia about the CoM
@@ -421,33 +420,6 @@ def _check_nominal_physical(box: LinkBox, source: str | None, prefix: str) -> No
 
 
 # ---------------------------------------------------------------------------- value grammar
-_OPS = {
-    ast.Add: operator.add,
-    ast.Sub: operator.sub,
-    ast.Mult: operator.mul,
-    ast.Div: operator.truediv,
-    ast.USub: operator.neg,
-    ast.UAdd: operator.pos,
-}
-
-
-def _arith(text: str) -> float:
-    """Evaluate a plain arithmetic expression such as ``20/12`` (numbers and + - * / only)."""
-
-    def ev(node: ast.AST) -> float:
-        if isinstance(node, ast.Expression):
-            return ev(node.body)
-        if isinstance(node, ast.Constant) and type(node.value) in (int, float):
-            return float(node.value)
-        if isinstance(node, ast.BinOp) and type(node.op) in _OPS:
-            return _OPS[type(node.op)](ev(node.left), ev(node.right))
-        if isinstance(node, ast.UnaryOp) and type(node.op) in _OPS:
-            return _OPS[type(node.op)](ev(node.operand))
-        raise ValueError(text)
-
-    return ev(ast.parse(text.strip(), mode="eval"))
-
-
 def _number(value: Any, source: str | None, fieldname: str, expected: str) -> float:
     if isinstance(value, bool):
         raise InputError(f"{value!r} is not a number; expected {expected}", source, fieldname)
@@ -455,8 +427,8 @@ def _number(value: Any, source: str | None, fieldname: str, expected: str) -> fl
         return float(value)
     if isinstance(value, str):
         try:
-            return _arith(value)
-        except (ValueError, SyntaxError, ZeroDivisionError):
+            return evaluate(value)
+        except ValueError:
             pass
     raise InputError(f"{value!r} is not a number; expected {expected}", source, fieldname)
 

@@ -1,0 +1,73 @@
+"""Computed torque on the nominal model: the simple, non-robust reference controller.
+
+With ``e = q_d - q`` and the nominal model ``M0, C0, g0``::
+
+    u = M0(q) (qdd_d + Kd ed + Kp e) + C0(q, qd) qd + g0(q)                          [N m]
+
+computed by one Pinocchio RNEA call. When the model is exact and there is no disturbance the
+closed loop is the linear error dynamics ``e'' + Kd e' + Kp e = 0`` per joint, with
+``Kp = omega_n^2`` and ``Kd = 2 zeta omega_n``. With a wrong model nothing is guaranteed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import InputError
+from ..robot import Robot
+from ..uncertainty import ParameterBox
+from .base import Controller, Reference
+
+
+class ComputedTorqueController(Controller):
+    """Computed torque with PD error feedback (module docstring).
+
+    Args:
+        robot: The model the controller believes in (the nominal robot).
+        natural_frequency: ``omega_n`` [rad/s] of the error dynamics, > 0.
+        damping: Damping ratio ``zeta`` (1: critically damped), > 0.
+
+    Raises:
+        InputError: a non-positive or non-finite gain.
+    """
+
+    name = "computed-torque"
+
+    def __init__(self, robot: Robot, *, natural_frequency: float = 10.0, damping: float = 1.0):
+        for label, value in (("natural_frequency", natural_frequency), ("damping", damping)):
+            if not np.isfinite(value) or value <= 0:
+                raise InputError(f"{label}={value} must be a finite number > 0", field=label)
+        self.robot = robot
+        self.natural_frequency = float(natural_frequency)
+        self.damping = float(damping)
+        self.Kp = self.natural_frequency**2  # [1/s^2]
+        self.Kd = 2.0 * self.damping * self.natural_frequency  # [1/s]
+        self._data = robot.model.createData()
+
+    def output(
+        self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
+    ) -> np.ndarray:
+        """``u = M0 (qdd_d + Kd ed + Kp e) + C0 qd + g0`` [N m]."""
+        acceleration = reference.qdd + self.Kd * (reference.qd - qd) + self.Kp * (reference.q - q)
+        config = self.robot.configuration(q)
+        return pin.rnea(self.robot.model, self._data, config, qd, acceleration).copy()
+
+    def __repr__(self) -> str:
+        return (
+            f"ComputedTorqueController(natural_frequency={self.natural_frequency:g}, "
+            f"damping={self.damping:g})"
+        )
+
+
+def synthesize_computed_torque(
+    robot: Robot,
+    box: ParameterBox | None = None,
+    *,
+    natural_frequency: float = 10.0,
+    damping: float = 1.0,
+) -> ComputedTorqueController:
+    """Computed torque on the nominal model of ``robot`` and ``box`` (payloads attached at their
+    nominal point); the box's intervals are ignored."""
+    model = robot if box is None else box.nominal_robot(robot)
+    return ComputedTorqueController(model, natural_frequency=natural_frequency, damping=damping)

@@ -1,0 +1,292 @@
+"""Desired joint trajectories with analytic derivatives.
+
+A :class:`Trajectory` gives the reference ``(q_d, qd_d, qdd_d)`` [rad, rad/s, rad/s^2] (metres for
+prismatic joints) at any time ``t`` [s]; :meth:`Trajectory.evaluate` does the same for an array of
+times. Three families:
+
+* :class:`PaperTrajectory`, the paper's test trajectory ``q_d(t) = a sin(pi t / 2) sin(pi t)``,
+  ``a = (pi/4, -pi/8)`` (period 4 s, starts at rest at zero);
+* :class:`SinusoidTrajectory`, ``q_d(t) = home + A sin(2 pi f t + phase)`` per joint;
+* :class:`QuinticTrajectory`, rest-to-rest quintic segments through via points (C2 continuous).
+
+:func:`generic_trajectory` picks a sinusoid or quintic trajectory that fits any robot: inside its
+joint limits and below its velocity limits.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Sequence
+
+import numpy as np
+
+from .control.base import Reference
+from .errors import InputError
+from .robot import Robot
+
+
+class Trajectory(ABC):
+    """A desired joint trajectory ``t -> (q_d, qd_d, qdd_d)``.
+
+    Attributes:
+        dof: Number of joints.
+    """
+
+    dof: int
+    #: Name used in scenario files.
+    kind: str
+
+    @abstractmethod
+    def evaluate(self, t: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(q, qd, qdd)`` at time(s) ``t`` [s]: each of shape ``np.shape(t) + (dof,)``."""
+
+    def reference(self, t: float) -> Reference:
+        """The reference at one time ``t`` [s]."""
+        q, qd, qdd = self.evaluate(float(t))
+        return Reference(q=q, qd=qd, qdd=qdd)
+
+
+def _vector(value: float | Sequence[float] | np.ndarray, dof: int, name: str) -> np.ndarray:
+    array = np.asarray(value, dtype=float)
+    if array.ndim == 0:
+        return np.full(dof, float(array))
+    if array.shape != (dof,):
+        raise InputError(
+            f"{name} has shape {array.shape}, expected ({dof},) or a scalar", field=name
+        )
+    if not np.all(np.isfinite(array)):
+        raise InputError(f"{name} must be finite, got {array.tolist()}", field=name)
+    return array.copy()
+
+
+class PaperTrajectory(Trajectory):
+    """``q_d(t) = amplitude * sin(pi t / 2) sin(pi t)`` (Giusti & Althoff, Sec. IV-A).
+
+    Args:
+        amplitude: Per-joint amplitude [rad]; the paper's ``(pi/4, -pi/8)`` by default.
+    """
+
+    kind = "paper"
+
+    def __init__(self, amplitude: Sequence[float] = (np.pi / 4, -np.pi / 8)):
+        self.amplitude = np.asarray(amplitude, dtype=float).reshape(-1)
+        self.dof = len(self.amplitude)
+
+    def evaluate(self, t):
+        t = np.asarray(t, dtype=float)[..., None]
+        w = np.pi
+        s1, c1 = np.sin(w * t / 2), np.cos(w * t / 2)
+        s2, c2 = np.sin(w * t), np.cos(w * t)
+        shape = s1 * s2
+        shape_d = w / 2 * c1 * s2 + w * s1 * c2
+        shape_dd = -(5 * w**2 / 4) * s1 * s2 + w**2 * c1 * c2
+        a = self.amplitude
+        return a * shape, a * shape_d, a * shape_dd
+
+    def reference(self, t: float) -> Reference:
+        # Scalar fast path (called once per control step): same formulas as evaluate().
+        w = math.pi
+        s1, c1 = math.sin(w * t / 2), math.cos(w * t / 2)
+        s2, c2 = math.sin(w * t), math.cos(w * t)
+        a = self.amplitude
+        return Reference(
+            q=a * (s1 * s2),
+            qd=a * (w / 2 * c1 * s2 + w * s1 * c2),
+            qdd=a * (-(5 * w**2 / 4) * s1 * s2 + w**2 * c1 * c2),
+        )
+
+    def __repr__(self) -> str:
+        return f"PaperTrajectory(amplitude={self.amplitude.tolist()})"
+
+
+class SinusoidTrajectory(Trajectory):
+    """``q_d(t) = home + amplitude sin(2 pi frequency t + phase)``, per joint.
+
+    Args:
+        home: Center of the motion [rad or m].
+        amplitude: Amplitude [rad or m] (scalar or per joint).
+        frequency: Frequency [Hz] (scalar or per joint), >= 0.
+        phase: Phase at ``t = 0`` [rad] (scalar or per joint); ``-pi/2`` starts at rest.
+    """
+
+    kind = "sinusoid"
+
+    def __init__(self, home, amplitude, frequency, phase=0.0):
+        self.home = np.asarray(home, dtype=float).reshape(-1)
+        self.dof = len(self.home)
+        self.amplitude = _vector(amplitude, self.dof, "amplitude")
+        self.frequency = _vector(frequency, self.dof, "frequency")
+        self.phase = _vector(phase, self.dof, "phase")
+        if np.any(self.frequency < 0):
+            raise InputError(
+                f"frequency must be >= 0 [Hz], got {self.frequency}", field="frequency"
+            )
+        self._omega = 2 * np.pi * self.frequency
+        self._velocity_gain = self.amplitude * self._omega
+        self._acceleration_gain = -self.amplitude * self._omega**2
+
+    def evaluate(self, t):
+        t = np.asarray(t, dtype=float)[..., None]
+        omega = 2 * np.pi * self.frequency
+        angle = omega * t + self.phase
+        s, c = np.sin(angle), np.cos(angle)
+        a = self.amplitude
+        return self.home + a * s, a * omega * c, -a * omega**2 * s
+
+    def reference(self, t: float) -> Reference:
+        # Scalar fast path (called once per control step): same formulas as evaluate().
+        angle = self._omega * t + self.phase
+        s = np.sin(angle)
+        return Reference(
+            q=self.home + self.amplitude * s,
+            qd=self._velocity_gain * np.cos(angle),
+            qdd=self._acceleration_gain * s,
+        )
+
+    @property
+    def peak_velocity(self) -> np.ndarray:
+        """``|A| 2 pi f`` [rad/s] per joint."""
+        return np.abs(self.amplitude) * 2 * np.pi * self.frequency
+
+    @property
+    def peak_acceleration(self) -> np.ndarray:
+        """``|A| (2 pi f)^2`` [rad/s^2] per joint."""
+        return np.abs(self.amplitude) * (2 * np.pi * self.frequency) ** 2
+
+    def __repr__(self) -> str:
+        return (
+            f"SinusoidTrajectory(home={self.home.tolist()}, amplitude={self.amplitude.tolist()}, "
+            f"frequency={self.frequency.tolist()}, phase={self.phase.tolist()})"
+        )
+
+
+#: Peak |velocity| and |acceleration| of the rest-to-rest quintic blend ``10 s^3 - 15 s^4 + 6 s^5``
+#: per unit distance, for a unit duration.
+QUINTIC_PEAK_VELOCITY = 15.0 / 8.0
+QUINTIC_PEAK_ACCELERATION = 10.0 / np.sqrt(3.0)
+
+
+class QuinticTrajectory(Trajectory):
+    """Rest-to-rest quintic segments through via points (zero velocity and acceleration at each).
+
+    Between ``times[k]`` and ``times[k+1]``, ``q_d = p_k + (p_{k+1} - p_k) b(tau)`` with
+    ``tau = (t - times[k]) / (times[k+1] - times[k])`` and ``b = 10 tau^3 - 15 tau^4 + 6 tau^5``.
+    Before the first time the trajectory holds the first point, after the last it holds the last.
+
+    Args:
+        points: Via points [rad or m], shape ``(n_points, dof)``, at least 2.
+        times: Times of the points [s], strictly increasing, length ``n_points``.
+    """
+
+    kind = "quintic"
+
+    def __init__(self, points, times):
+        self.points = np.atleast_2d(np.asarray(points, dtype=float))
+        self.times = np.asarray(times, dtype=float).reshape(-1)
+        if len(self.points) < 2 or len(self.times) != len(self.points):
+            raise InputError(
+                f"need at least 2 points and one time per point, got {len(self.points)} points "
+                f"and {len(self.times)} times",
+                field="points",
+            )
+        if not (np.all(np.isfinite(self.points)) and np.all(np.isfinite(self.times))):
+            raise InputError("points and times must be finite", field="points")
+        if np.any(np.diff(self.times) <= 0):
+            raise InputError(f"times must increase strictly, got {self.times}", field="times")
+        self.dof = self.points.shape[1]
+
+    def evaluate(self, t):
+        t = np.asarray(t, dtype=float)
+        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.times) - 2)
+        start, stop = self.times[k], self.times[k + 1]
+        length = stop - start
+        tau = np.clip((t - start) / length, 0.0, 1.0)[..., None]
+        length = length[..., None]
+        blend = tau**3 * (10 - 15 * tau + 6 * tau**2)
+        blend_d = 30 * tau**2 * (1 - tau) ** 2 / length
+        blend_dd = 60 * tau * (1 - tau) * (1 - 2 * tau) / length**2
+        delta = self.points[k + 1] - self.points[k]
+        return self.points[k] + delta * blend, delta * blend_d, delta * blend_dd
+
+    def __repr__(self) -> str:
+        return f"QuinticTrajectory(points={self.points.tolist()}, times={self.times.tolist()})"
+
+
+# ============================================================================ generic choice
+#: Largest amplitude generic trajectories use on a joint whose range is wide or unbounded.
+MAX_AMPLITUDE = {"revolute": 0.5, "continuous": 0.5, "prismatic": 0.05}  # [rad], [rad], [m]
+TRAJECTORY_KINDS = ("paper", "sinusoid", "quintic")
+
+
+def home_configuration(robot: Robot) -> np.ndarray:
+    """The middle of each joint's limits [rad or m], or 0 where a limit is infinite."""
+    lower, upper = robot.position_limits
+    middle = 0.5 * (lower + upper)
+    return np.where(np.isfinite(lower) & np.isfinite(upper), middle, 0.0)
+
+
+def generic_trajectory(
+    robot: Robot,
+    kind: str = "sinusoid",
+    *,
+    home: Sequence[float] | None = None,
+    amplitude_fraction: float = 0.25,
+    frequency: float = 0.25,
+    velocity_fraction: float = 0.5,
+    segment_duration: float = 2.0,
+) -> Trajectory:
+    """A smooth trajectory for any robot, inside its joint limits and below its velocity limits.
+
+    The motion is centered at ``home`` (default :func:`home_configuration`) with, per joint, the
+    amplitude ``amplitude_fraction`` of the distance to the nearer limit, capped at
+    :data:`MAX_AMPLITUDE`. ``sinusoid``: frequencies spread evenly from ``frequency`` [Hz] (first
+    joint) to ``1.5 frequency`` (last joint), lowered where needed so that the peak speed stays
+    below ``velocity_fraction`` of the URDF velocity limit; phase ``-pi/2`` so that it starts at
+    rest at ``home - amplitude``.
+    ``quintic``: rest-to-rest segments ``home -> home + A -> home - A -> home`` (alternate signs on
+    alternate joints), each lasting ``segment_duration`` [s] or longer if the speed requires it.
+
+    Raises:
+        InputError: unknown ``kind`` or out-of-range fractions, or a home outside the limits.
+    """
+    if kind not in ("sinusoid", "quintic"):
+        raise InputError(
+            f"unknown generic trajectory kind '{kind}'; valid: sinusoid, quintic", field="kind"
+        )
+    for name, value in (
+        ("amplitude_fraction", amplitude_fraction),
+        ("velocity_fraction", velocity_fraction),
+    ):
+        if not 0 < value <= 1:
+            raise InputError(f"{name}={value} must be in (0, 1]", field=name)
+    if not (frequency > 0 and segment_duration > 0):
+        raise InputError("frequency and segment_duration must be > 0", field="frequency")
+    lower, upper = robot.position_limits
+    center = home_configuration(robot) if home is None else _vector(home, robot.dof, "home")
+    if np.any(center < lower) or np.any(center > upper):
+        raise InputError(f"home {center.tolist()} lies outside the joint limits", field="home")
+    margin = np.minimum(center - lower, upper - center)
+    cap = np.array([MAX_AMPLITUDE[kind_] for kind_ in robot.joint_kinds])
+    amplitude = np.minimum(amplitude_fraction * margin, cap)
+    speed = velocity_fraction * _usable(robot.velocity_limit)
+
+    if kind == "sinusoid":
+        frequencies = frequency * np.linspace(1.0, 1.5, robot.dof)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            allowed = np.where(amplitude > 0, speed / (2 * np.pi * amplitude), np.inf)
+        return SinusoidTrajectory(center, amplitude, np.minimum(frequencies, allowed), -np.pi / 2)
+
+    signs = np.where(np.arange(robot.dof) % 2 == 0, 1.0, -1.0)
+    points = np.array([center, center + signs * amplitude, center - signs * amplitude, center])
+    distance = np.abs(np.diff(points, axis=0)).max(axis=0)  # per joint, largest segment
+    with np.errstate(divide="ignore", invalid="ignore"):
+        needed = np.where(distance > 0, QUINTIC_PEAK_VELOCITY * distance / speed, 0.0)
+    duration = max(segment_duration, float(np.max(needed)))
+    return QuinticTrajectory(points, duration * np.arange(len(points)))
+
+
+def _usable(velocity_limit: np.ndarray) -> np.ndarray:
+    """URDF velocity limits, with missing ones (0, negative, non-finite) read as unlimited."""
+    limit = np.asarray(velocity_limit, dtype=float)
+    return np.where(np.isfinite(limit) & (limit > 0), limit, np.inf)
