@@ -10,6 +10,7 @@ The main entry points::
 from .bounds import METHODS as BOUND_METHODS
 from .bounds import BoundMethod, default_method, make_bound
 from .errors import InputError, SimulationError, UrpcError
+from .modular import Assembly, assemble, load_assembly, load_module_library
 from .robot import Robot, load_robot
 from .uncertainty import ParameterBox, load_parameter_point, load_uncertainty, parse_uncertainty
 
@@ -17,6 +18,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "BOUND_METHODS",
+    "Assembly",
     "BoundMethod",
     "InputError",
     "ParameterBox",
@@ -30,4 +32,7 @@ __all__ = [
     "make_bound",
     "parse_uncertainty",
     "__version__",
+    "assemble",
+    "load_assembly",
+    "load_module_library",
 ]

@@ -219,13 +219,17 @@ def load_uncertainty(path: str | Path, robot: Robot) -> ParameterBox:
     return parse_uncertainty(document, robot, source=str(path))
 
 
+#: libyaml's safe loader when PyYAML was built with it (5-10x faster), else the Python one.
+_SafeLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
 def read_yaml(path: Path) -> Any:
     """Load a YAML file, turning every I/O or syntax problem into an :class:`InputError`."""
     if not path.is_file():
         raise InputError("file does not exist", source=path)
     try:
         with path.open() as stream:
-            return yaml.safe_load(stream)
+            return yaml.load(stream, Loader=_SafeLoader)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
@@ -266,7 +270,7 @@ def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) ->
                 source=source,
                 field=f"links.{name}",
             )
-        boxes.append(_parse_link_box(entry, name, link.inertia, source, f"links.{name}"))
+        boxes.append(parse_link_box(entry, name, link.inertia, source, f"links.{name}"))
     return ParameterBox(
         links=tuple(boxes),
         payloads=tuple(payloads),
@@ -279,7 +283,7 @@ def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) ->
 def _parse_disturbance(value: Any, source: str | None) -> float | None:
     if isinstance(value, str) and value.strip().lower() == "unknown":
         return None
-    number = _number(value, source, "disturbance", "a bound on ||d|| [N m] or 'unknown'")
+    number = parse_number(value, source, "disturbance", "a bound on ||d|| [N m] or 'unknown'")
     if not np.isfinite(number) or number < 0:
         raise InputError(
             f"{value!r} is not a valid bound: give a finite number >= 0 [N m] or 'unknown'",
@@ -326,7 +330,7 @@ def _parse_payload(doc: Any, robot: Robot, source: str | None) -> tuple[Payload,
     center = np.zeros(10)
     for k, key in enumerate(PHYSICAL_FIELDS):
         if key in nominal_doc:
-            center[k] = _number(nominal_doc[key], source, f"payload.nominal.{key}", "a number")
+            center[k] = parse_number(nominal_doc[key], source, f"payload.nominal.{key}", "a number")
         elif key in entry:
             lo, hi = _interval(entry[key], None, source, f"payload.{key}")
             center[k] = 0.5 * (lo + hi)
@@ -334,13 +338,13 @@ def _parse_payload(doc: Any, robot: Robot, source: str | None) -> tuple[Payload,
         raise InputError(
             "a payload needs a mass interval [kg]", source=source, field="payload.mass"
         )
-    box = _parse_link_box(
+    box = parse_link_box(
         entry, name, inertia_from_physical(center), source, "payload", allow_zero_mass=True
     )
     return Payload(name, link), box
 
 
-def _parse_link_box(
+def parse_link_box(
     entry: Any,
     name: str,
     nominal_inertia: pin.Inertia,
@@ -420,7 +424,7 @@ def _check_nominal_physical(box: LinkBox, source: str | None, prefix: str) -> No
 
 
 # ---------------------------------------------------------------------------- value grammar
-def _number(value: Any, source: str | None, fieldname: str, expected: str) -> float:
+def parse_number(value: Any, source: str | None, fieldname: str, expected: str) -> float:
     if isinstance(value, bool):
         raise InputError(f"{value!r} is not a number; expected {expected}", source, fieldname)
     if isinstance(value, int | float):
@@ -456,11 +460,13 @@ def _interval(
             text = item.strip()
             if text.endswith("%"):
                 relative_allowed()
-                return nominal * (1.0 + _number(text[:-1], source, fieldname, "a percentage") / 100)
+                return nominal * (
+                    1.0 + parse_number(text[:-1], source, fieldname, "a percentage") / 100
+                )
             if text[:1] in "+-" and not text.startswith("+-"):
                 relative_allowed()
-                return nominal + _number(text, source, fieldname, "an offset")
-        return _number(item, source, fieldname, "a number")
+                return nominal + parse_number(text, source, fieldname, "an offset")
+        return parse_number(item, source, fieldname, "a number")
 
     if isinstance(value, list | tuple):
         if len(value) != 2:
@@ -470,18 +476,18 @@ def _interval(
         relative_allowed()
         text = value.strip()[:-1].strip()
         text = text[2:] if text.startswith("+-") else text
-        fraction = _number(text, source, fieldname, "a percentage") / 100
+        fraction = parse_number(text, source, fieldname, "a percentage") / 100
         if fraction < 0:
             raise bad(f"{value!r} is a negative width")
         lo, hi = nominal - abs(nominal) * fraction, nominal + abs(nominal) * fraction
     elif isinstance(value, str) and value.strip().startswith("+-"):
         relative_allowed()
-        width = _number(value.strip()[2:], source, fieldname, "an offset")
+        width = parse_number(value.strip()[2:], source, fieldname, "an offset")
         if width < 0:
             raise bad(f"{value!r} is a negative width")
         lo, hi = nominal - width, nominal + width
     elif isinstance(value, int | float | str) and not isinstance(value, bool):
-        lo = hi = _number(value, source, fieldname, _INTERVAL_HELP)
+        lo = hi = parse_number(value, source, fieldname, _INTERVAL_HELP)
     else:
         raise bad(f"{value!r} is not an interval")
     if not (np.isfinite(lo) and np.isfinite(hi)):
@@ -564,11 +570,13 @@ def load_parameter_point(
                 for bkey, bvalue in value.items():
                     _check_keys({bkey: 0}, BARYCENTRIC_FIELDS, source, f"links.{name}.barycentric.")
                     k = BARYCENTRIC_FIELDS.index(bkey)
-                    coordinates[k] = _number(bvalue, source, f"links.{name}.{bkey}", "a number")
+                    coordinates[k] = parse_number(
+                        bvalue, source, f"links.{name}.{bkey}", "a number"
+                    )
                 continue
             _check_keys({key: 0}, link_box.fields, source, f"links.{name}.")
             k = link_box.fields.index(key)
-            coordinates[k] = _number(value, source, f"links.{name}.{key}", "a number")
+            coordinates[k] = parse_number(value, source, f"links.{name}.{key}", "a number")
         if coordinates[0] <= 0 and name not in [p.name for p in box.payloads]:
             raise InputError("mass must be > 0", source=source, field=f"links.{name}.mass")
         problem = inertia_problem(np.asarray(link_box.inertia(coordinates).inertia))
