@@ -9,9 +9,14 @@ The main entry points::
 
 from .bounds import METHODS as BOUND_METHODS
 from .bounds import BoundMethod, default_method, make_bound
+from .control.interval import IntervalPassivityController
 from .errors import InputError, SimulationError, UrpcError
+from .metrics import METRIC_NAMES
 from .modular import Assembly, assemble, load_assembly, load_module_library
+from .results import SimulationResult
 from .robot import Robot, load_robot
+from .simulation import simulate
+from .synthesis import synthesize
 from .uncertainty import ParameterBox, load_parameter_point, load_uncertainty, parse_uncertainty
 
 __version__ = "0.1.0"
@@ -32,6 +37,11 @@ __all__ = [
     "make_bound",
     "parse_uncertainty",
     "__version__",
+    "IntervalPassivityController",
+    "METRIC_NAMES",
+    "SimulationResult",
+    "simulate",
+    "synthesize",
     "assemble",
     "load_assembly",
     "load_module_library",

@@ -6,13 +6,17 @@ about the joint frame). ``C`` is the Christoffel-consistent Coriolis matrix, who
 
     C(q, v) w = (c(q, v + w) - c(q, v - w)) / 4
 
-With Pinocchio's ``computeJointTorqueRegressor`` ``Y(q, v, a)`` (``Y pi = M a + c(q, v) + g``)
-evaluated on two model copies carrying gravity ``+2 g`` and ``-2 g``::
+Pinocchio's ``computeJointTorqueRegressor`` ``Y_g(q, v, a)`` (``Y_g pi = M a + c(q, v) + g``, for
+gravity ``g``) is linear in ``(a, g)`` and quadratic in ``v``. Two calls, one on a model copy with
+gravity ``4 g`` and one on a copy without gravity, give::
 
-    Y_SL = (Y_{+2g}(q, qd + qd_a, 2 qdd_a) - Y_{-2g}(q, qd - qd_a, -2 qdd_a)) / 4
+    4 Y_SL = Y_{4g}(q, qd + qd_a, 4 qdd_a) - Y_0(q, qd - qd_a, 0)
 
-(the accelerations and gravity add up to ``4 (M qdd_a + g)``, the velocity products to
-``4 C(q, qd) qd_a``). Two regressor calls per control step.
+(the first call carries ``4 (M qdd_a + g)`` and ``c(qd + qd_a)``, the second only ``c(qd - qd_a)``;
+their difference of velocity products is ``4 C(q, qd) qd_a``). The factors 4 are powers of two, so
+they add no rounding. :meth:`SlotineLiRegressor.scaled` returns ``4 Y_SL`` without the final
+scaling: the bound methods fold ``1/4`` into the matrices they precompute, which saves one array
+operation per control step.
 
 A link fixed to body ``j`` by the placement ``X`` contributes ``A(X) pi_link`` to ``pi_j``, a linear
 map of its own standard parameters (link frame); :func:`placement_matrix` builds ``A(X)``.
@@ -33,33 +37,65 @@ class SlotineLiRegressor:
         robot: The robot (only its kinematics matter; inertias are ignored by regressors).
     """
 
+    #: :meth:`scaled` returns ``SCALE * Y_SL``.
+    SCALE = 4.0
+
     def __init__(self, robot: Robot):
         self.robot = robot
-        self._model_up = robot.model.copy()
-        self._model_up.gravity.linear = 2.0 * np.asarray(robot.model.gravity.linear)
-        self._model_down = robot.model.copy()
-        self._model_down.gravity.linear = -2.0 * np.asarray(robot.model.gravity.linear)
-        self._data_up = self._model_up.createData()
-        self._data_down = self._model_down.createData()
+        gravity = np.asarray(robot.model.gravity.linear)
+        self._model_gravity = robot.model.copy()
+        self._model_gravity.gravity.linear = self.SCALE * gravity
+        self._model_free = robot.model.copy()
+        self._model_free.gravity.linear = np.zeros(3)
+        self._data_gravity = self._model_gravity.createData()
+        self._data_free = self._model_free.createData()
+        self._zero = np.zeros(robot.dof)
+        # Joint angles are the Pinocchio configuration unless a joint is continuous (cos, sin).
+        self._configuration = None if robot.model.nq == robot.model.nv else robot.configuration
 
     def __call__(
         self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray
     ) -> np.ndarray:
-        """``Y_SL`` [N m per unit parameter], shape ``(dof, 10 * dof)``."""
-        config = self.robot.configuration(q)
-        up = pin.computeJointTorqueRegressor(
-            self._model_up, self._data_up, config, qd + qd_a, 2.0 * qdd_a
+        """``Y_SL`` [N m per unit parameter], shape ``(dof, 10 * dof)``.
+
+        Args:
+            q: Joint positions [rad or m].
+            qd: Joint velocities [rad/s or m/s].
+            qd_a: The controller's reference velocity ``qd_d + Kr e`` [rad/s or m/s].
+            qdd_a: The controller's reference acceleration ``qdd_d + Kr ed`` [rad/s^2 or m/s^2].
+        """
+        Y = self.scaled(q, qd, qd_a, qdd_a)
+        Y *= 1.0 / self.SCALE
+        return Y
+
+    def scaled(
+        self,
+        q: np.ndarray,
+        qd: np.ndarray,
+        qd_a: np.ndarray,
+        qdd_a: np.ndarray,
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """``SCALE * Y_SL`` (exactly, the scale is a power of two), written into ``out`` if given.
+
+        The fast path of the bound methods, which fold ``1 / SCALE`` into their own matrices.
+        """
+        config = q if self._configuration is None else self._configuration(q)
+        with_gravity = pin.computeJointTorqueRegressor(
+            self._model_gravity, self._data_gravity, config, qd + qd_a, self.SCALE * qdd_a
         )
-        down = pin.computeJointTorqueRegressor(
-            self._model_down, self._data_down, config, qd - qd_a, -2.0 * qdd_a
+        free = pin.computeJointTorqueRegressor(
+            self._model_free, self._data_free, config, qd - qd_a, self._zero
         )
-        return 0.25 * (up - down)
+        # Pinocchio hands back a fresh copy, which can take the difference in place.
+        return np.subtract(with_gravity, free, out=with_gravity if out is None else out)
 
 
 def placement_matrix(placement: pin.SE3) -> np.ndarray:
     """The 10x10 matrix ``A`` with ``pi_body = A pi_link`` for a link at ``placement`` in the body
     frame (standard parameters, Pinocchio order). Exact up to rounding: ``Inertia.se3Action`` is
-    linear in the standard parameters, so the columns are differences of two actions."""
+    linear in the standard parameters, so the columns are differences of two actions. The identity
+    placement gives exactly the identity matrix."""
     base = np.zeros(10)
     base[0] = 1.0
     acted_base = np.asarray(placement.act(pin.Inertia.FromDynamicParameters(base)).toDynamicParameters())

@@ -11,8 +11,13 @@ from ..uncertainty import ParameterBox
 from .base import BoundMethod
 from .hull import HullBound
 from .rigorous import RigorousBound
+from .vertex import VertexBound
 
-METHODS: dict[str, type[BoundMethod]] = {"hull": HullBound, "rigorous": RigorousBound}
+METHODS: dict[str, type[BoundMethod]] = {
+    "hull": HullBound,
+    "vertex": VertexBound,
+    "rigorous": RigorousBound,
+}
 
 
 def make_bound(name: str, robot: Robot, box: ParameterBox) -> BoundMethod:

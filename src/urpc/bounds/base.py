@@ -17,6 +17,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from ..regressor import placement_matrix
 from ..robot import Robot
 from ..uncertainty import ParameterBox
 
@@ -60,7 +61,8 @@ class BoundMethod(ABC):
     def rho(self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray) -> np.ndarray:
         """``rho_i = max(|lower_i|, |upper_i|)`` [N m], the paper's eq. (9)."""
         lower, upper = self.enclose(q, qd, qd_a, qdd_a)
-        return np.maximum(np.abs(lower), np.abs(upper))
+        # lower <= upper, so max(|lower|, |upper|) = max(-lower, upper).
+        return np.maximum(-lower, upper)
 
     @property
     def regressor(self):
@@ -83,3 +85,13 @@ class BoundMethod(ABC):
             lower = lower - self.disturbance_bound
             upper = upper + self.disturbance_bound
         return lower, upper
+
+
+def link_body_placement(robot: Robot, link: str) -> tuple[int, np.ndarray]:
+    """Where a link's parameters enter ``Y_SL``: the body index ``b`` (its columns are
+    ``10 b : 10 b + 10``) and the matrix ``A`` with ``pi_body = A pi_link`` (the identity when
+    the link frame is the joint frame, as for the child link of a URDF joint)."""
+    inertial = robot.link(link)
+    if inertial.joint_index == 0:
+        raise ValueError(f"link '{link}' is fixed to the base and has no regressor")
+    return inertial.joint_index - 1, placement_matrix(inertial.placement)

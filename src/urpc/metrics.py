@@ -1,0 +1,123 @@
+"""Metrics of one simulation run: did it meet ``||e|| < epsilon``, and at what torque cost.
+
+Definitions, for recorded samples ``t_0 < ... < t_K`` (the control samples of a sampled run, the
+output grid of a continuous one), ``T = t_K - t_0`` and ``e_k = q_d(t_k) - q(t_k)``:
+
+``entry_time`` [s]
+    The first recorded time ``t_j`` such that ``||e_k|| < epsilon`` for every ``k >= j``;
+    ``None`` when the last sample is outside the ball.
+``met`` [bool]
+    ``entry_time`` is not ``None`` and ``entry_time <= t_0 + 0.75 T``: at least the final quarter
+    of the run lies inside the epsilon ball.
+``max_error_after_entry`` [rad]
+    ``max ||e_k||`` over ``t_k >= entry_time`` (``None`` when never entered).
+``final_error`` [rad]
+    ``max ||e_k||`` over the last second, ``t_k >= t_K - 1`` (the whole run if shorter).
+``torque_rms`` [N m]
+    ``sqrt(mean_k ||u_k||^2)``, the RMS of the Euclidean norm of the commanded torque.
+``torque_peak`` [N m]
+    ``max_{k,i} |u_{k,i}|``, the largest commanded joint torque.
+``torque_variation`` [N m/s]
+    ``sum_{k=1..K} ||u_k - u_{k-1}||_1 / T``: the total variation of the commanded torque per
+    second, the chattering index. It depends on the recording grid for non-smooth torques, so
+    compare runs recorded at the same rate.
+``phi`` [N m s/rad], ``kappa`` [s/rad]
+    The final gains (``None`` for controllers without them).
+``step_time_median`` [s]
+    Median wall time of one control step (one torque evaluation and state update).
+``wall_time`` [s]
+    Wall time of the whole simulation.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from .results import SimulationResult
+
+#: The metric names, in report order (also the keys of ``SimulationResult.metrics``).
+METRIC_NAMES = (
+    "entry_time",
+    "met",
+    "max_error_after_entry",
+    "final_error",
+    "torque_rms",
+    "torque_peak",
+    "torque_variation",
+    "phi",
+    "kappa",
+    "step_time_median",
+    "wall_time",
+)
+
+
+def compute_metrics(result: SimulationResult) -> dict[str, Any]:
+    """The metrics of a run (keys :data:`METRIC_NAMES`; see the module docstring)."""
+    return series_metrics(
+        result.t,
+        result.error_norm,
+        result.torque,
+        result.epsilon,
+        phi=result.phi,
+        kappa=result.kappa,
+        step_time_median=result.step_time_median,
+        wall_time=result.wall_time,
+    )
+
+
+def series_metrics(
+    t: np.ndarray,
+    error_norm: np.ndarray,
+    torque: np.ndarray,
+    epsilon: float,
+    *,
+    phi: np.ndarray | None = None,
+    kappa: np.ndarray | None = None,
+    step_time_median: float | None = None,
+    wall_time: float | None = None,
+) -> dict[str, Any]:
+    """The metrics from raw series: times ``t`` [s] (``K+1``), ``error_norm`` [rad] (``K+1``),
+    commanded ``torque`` [N m] (``(K+1) x dof``), the precision ``epsilon`` [rad]; ``phi`` and
+    ``kappa`` series whose last value is reported (``None`` or all-NaN: not applicable)."""
+    t = np.asarray(t, dtype=float)
+    error_norm = np.asarray(error_norm, dtype=float)
+    torque = np.asarray(torque, dtype=float).reshape(len(t), -1)
+    span = float(t[-1] - t[0])
+    outside = np.flatnonzero(~(error_norm < epsilon))
+    if outside.size == 0:
+        entry = 0
+    elif outside[-1] == len(t) - 1:
+        entry = None
+    else:
+        entry = int(outside[-1]) + 1
+    entry_time = None if entry is None else float(t[entry])
+    last_second = t >= t[-1] - 1.0
+    differences = np.abs(np.diff(torque, axis=0)).sum() if len(t) > 1 else 0.0
+    return {
+        "entry_time": entry_time,
+        "met": bool(entry_time is not None and entry_time <= t[0] + 0.75 * span),
+        "max_error_after_entry": None if entry is None else float(error_norm[entry:].max()),
+        "final_error": float(error_norm[last_second].max()),
+        "torque_rms": float(math.sqrt(np.mean(np.sum(torque**2, axis=1)))),
+        "torque_peak": float(np.abs(torque).max()),
+        "torque_variation": float(differences / span) if span > 0 else 0.0,
+        "phi": _final(phi),
+        "kappa": _final(kappa),
+        "step_time_median": _optional(step_time_median),
+        "wall_time": _optional(wall_time),
+    }
+
+
+def _final(series: np.ndarray | None) -> float | None:
+    if series is None or len(series) == 0:
+        return None
+    value = float(np.asarray(series, dtype=float)[-1])
+    return None if math.isnan(value) else value
+
+
+def _optional(value: float | None) -> float | None:
+    return None if value is None or math.isnan(value) else float(value)

@@ -1,0 +1,264 @@
+"""The result of one simulation run: time series, metadata, metrics, files and figures.
+
+A :class:`SimulationResult` holds raw numpy arrays, one row per recorded sample (every control
+sample of a sampled run, the output grid of a continuous one). Computation is separate from
+reporting: :attr:`~SimulationResult.metrics` and :meth:`~SimulationResult.summary` derive numbers,
+:meth:`~SimulationResult.save` writes files, :meth:`~SimulationResult.plot` returns figures.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass, field, fields
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import InputError
+from .metrics import METRIC_NAMES, compute_metrics
+
+#: File names written by :meth:`SimulationResult.save`.
+NPZ_NAME, CSV_NAME, SUMMARY_NAME = "result.npz", "result.csv", "summary.json"
+
+_SERIES = ("t", "q", "qd", "q_desired", "qd_desired", "torque", "disturbance", "phi", "kappa")
+_SERIES_OPTIONAL = ("saturated",)
+
+
+@dataclass(frozen=True, eq=False)
+class SimulationResult:
+    """Time series and metadata of one closed-loop run.
+
+    Series (``K`` samples, ``n = dof``):
+
+    Attributes:
+        t: Sample times [s], ``(K,)``.
+        q, qd: Joint positions [rad] and velocities [rad/s] of the plant, ``(K, n)``.
+        q_desired, qd_desired: The reference position [rad] and velocity [rad/s], ``(K, n)``.
+        torque: Commanded torque ``u`` [N m] (the controller's output, before any torque limit),
+            ``(K, n)``; held over the following sample period in a sampled run.
+        disturbance: Input disturbance ``d`` [N m] added at the plant input, ``(K, n)``.
+        phi, kappa: The controller's gains [N m s/rad], [s/rad], ``(K,)``, NaN when the
+            controller has none.
+        saturated: True where the torque limit clipped the command, ``(K,)``.
+        controller: Controller name.
+        epsilon: Required precision [rad] the run is judged against.
+        duration: Simulated time [s].
+        sample_period: Control period [s], ``None`` for continuous time.
+        seed: Seed of the disturbance generator.
+        scenario: Scenario name (free text, may be empty).
+        plant: Description of the true plant's parameters.
+        disturbance_bound: Radius of the disturbance ball [N m].
+        torque_limit: Per-joint torque limit [N m], ``None`` when unlimited.
+        step_time_median: Median wall time of one control step [s].
+        wall_time: Wall time of the whole simulation [s].
+        info: Extra metadata (integrator, tolerances, counters), JSON-serializable.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    q_desired: np.ndarray
+    qd_desired: np.ndarray
+    torque: np.ndarray
+    disturbance: np.ndarray
+    phi: np.ndarray
+    kappa: np.ndarray
+    saturated: np.ndarray
+    controller: str
+    epsilon: float
+    duration: float
+    sample_period: float | None = None
+    seed: int = 0
+    scenario: str = ""
+    plant: str = ""
+    disturbance_bound: float = 0.0
+    torque_limit: tuple[float, ...] | None = None
+    step_time_median: float = math.nan
+    wall_time: float = math.nan
+    info: dict[str, Any] = field(default_factory=dict)
+
+    # ------------------------------------------------------------------ derived series
+    @property
+    def dof(self) -> int:
+        return self.q.shape[1]
+
+    @property
+    def error(self) -> np.ndarray:
+        """Tracking error ``e = q_d - q`` [rad], ``(K, n)``."""
+        return self.q_desired - self.q
+
+    @property
+    def error_norm(self) -> np.ndarray:
+        """``||e||`` [rad], ``(K,)``."""
+        return np.linalg.norm(self.error, axis=1)
+
+    @property
+    def saturated_samples(self) -> int:
+        """Number of samples at which the torque limit clipped the command."""
+        return int(np.count_nonzero(self.saturated))
+
+    @cached_property
+    def metrics(self) -> dict[str, Any]:
+        """The run's metrics, keys :data:`urpc.metrics.METRIC_NAMES` (see :mod:`urpc.metrics`)."""
+        return compute_metrics(self)
+
+    def summary(self) -> dict[str, Any]:
+        """The metrics plus ``epsilon`` and ``controller`` (the content of ``summary.json``)."""
+        metrics = self.metrics
+        summary = {name: metrics[name] for name in METRIC_NAMES}
+        return {**summary, "epsilon": float(self.epsilon), "controller": self.controller}
+
+    def __repr__(self) -> str:
+        timing = "continuous" if self.sample_period is None else f"T={self.sample_period:g} s"
+        return (
+            f"SimulationResult({self.controller!r}, scenario={self.scenario!r}, {timing}, "
+            f"duration={self.duration:g} s, samples={len(self.t)}, met={self.metrics['met']})"
+        )
+
+    # ------------------------------------------------------------------ files
+    def save(self, directory: str | Path) -> Path:
+        """Write ``result.npz`` (every series and the metadata), ``result.csv`` and
+        ``summary.json`` into ``directory`` (created if missing), atomically.
+
+        A new directory is assembled under a temporary name and renamed into place; an existing
+        one receives each file through a temporary file and ``os.replace``. Either way a failure
+        leaves no partial file behind.
+
+        Returns:
+            The directory.
+        """
+        directory = Path(directory)
+        writers = {
+            NPZ_NAME: self._write_npz,
+            CSV_NAME: self._write_csv,
+            SUMMARY_NAME: self._write_summary,
+        }
+        if directory.is_dir():
+            temporaries = []
+            try:
+                for name, write in writers.items():
+                    handle, temporary = tempfile.mkstemp(
+                        prefix=f".{name}.", suffix=".tmp", dir=directory
+                    )
+                    os.close(handle)
+                    temporaries.append((Path(temporary), directory / name))
+                    write(Path(temporary))
+                for temporary, final in temporaries:
+                    os.replace(temporary, final)
+            finally:
+                for temporary, _ in temporaries:
+                    temporary.unlink(missing_ok=True)
+            return directory
+        directory.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", dir=directory.parent))
+        try:
+            for name, write in writers.items():
+                write(staging / name)
+            os.rename(staging, directory)
+        except BaseException:
+            shutil.rmtree(staging, ignore_errors=True)
+            raise
+        return directory
+
+    @classmethod
+    def load(cls, directory: str | Path) -> SimulationResult:
+        """Read a result written by :meth:`save` (from its ``result.npz``).
+
+        Raises:
+            InputError: the file is missing or is not a urpc result.
+        """
+        path = Path(directory) / NPZ_NAME
+        if not path.is_file():
+            raise InputError("no result.npz here; give a directory written by save()", path)
+        try:
+            with np.load(path, allow_pickle=False) as archive:
+                series = {name: archive[name] for name in archive.files if name != "metadata"}
+                metadata = json.loads(str(archive["metadata"]))
+        except (KeyError, ValueError, OSError) as exc:
+            raise InputError(f"not a urpc result file ({exc})", path) from None
+        if metadata.get("torque_limit") is not None:
+            metadata["torque_limit"] = tuple(metadata["torque_limit"])
+        known = {f.name for f in fields(cls)}
+        values = {k: v for k, v in {**series, **metadata}.items() if k in known}
+        for name in ("step_time_median", "wall_time"):
+            values[name] = math.nan if values.get(name) is None else values[name]
+        return cls(**values)
+
+    def _metadata(self) -> dict[str, Any]:
+        return {
+            "controller": self.controller,
+            "epsilon": float(self.epsilon),
+            "duration": float(self.duration),
+            "sample_period": self.sample_period,
+            "seed": int(self.seed),
+            "scenario": self.scenario,
+            "plant": self.plant,
+            "disturbance_bound": float(self.disturbance_bound),
+            "torque_limit": None if self.torque_limit is None else list(self.torque_limit),
+            "step_time_median": _json_float(self.step_time_median),
+            "wall_time": _json_float(self.wall_time),
+            "info": self.info,
+        }
+
+    def _write_npz(self, path: Path) -> None:
+        arrays = {name: np.asarray(getattr(self, name)) for name in _SERIES + _SERIES_OPTIONAL}
+        arrays["error"] = self.error
+        arrays["error_norm"] = self.error_norm
+        arrays["metadata"] = np.array(json.dumps(self._metadata()))
+        with path.open("wb") as stream:
+            np.savez_compressed(stream, **arrays)
+
+    def _write_csv(self, path: Path) -> None:
+        n = self.dof
+        joints = [str(i + 1) for i in range(n)]
+        columns = ["t"]
+        blocks = [self.t[:, None]]
+        for prefix, data in (
+            ("q", self.q),
+            ("qd", self.qd),
+            ("q_desired", self.q_desired),
+            ("qd_desired", self.qd_desired),
+            ("e", self.error),
+        ):
+            columns += [f"{prefix}_{j}" for j in joints]
+            blocks.append(data)
+        columns.append("e_norm")
+        blocks.append(self.error_norm[:, None])
+        for prefix, data in (("u", self.torque), ("d", self.disturbance)):
+            columns += [f"{prefix}_{j}" for j in joints]
+            blocks.append(data)
+        columns += ["phi", "kappa"]
+        blocks += [self.phi[:, None], self.kappa[:, None]]
+        table = np.hstack(blocks)
+        with path.open("w") as stream:
+            np.savetxt(
+                stream, table, fmt="%.12g", delimiter=",", header=",".join(columns), comments=""
+            )
+
+    def _write_summary(self, path: Path) -> None:
+        with path.open("w") as stream:
+            json.dump(self.summary(), stream, indent=2)
+            stream.write("\n")
+
+    # ------------------------------------------------------------------ figures
+    def plot(self) -> dict[str, Any]:
+        """Figures of this run: ``trajectory`` (desired and actual joint positions), ``error``
+        (``||e||`` on a log scale with the epsilon line) and ``torque`` (commanded torques), as
+        :class:`matplotlib.figure.Figure` objects (headless; save them with ``savefig``)."""
+        from .plotting import plot_error, plot_torque, plot_trajectory
+
+        return {
+            "trajectory": plot_trajectory(self),
+            "error": plot_error(self),
+            "torque": plot_torque(self),
+        }
+
+
+def _json_float(value: float) -> float | None:
+    return None if value is None or math.isnan(value) else float(value)

@@ -1,0 +1,104 @@
+"""Synthesis: build the interval passivity controller from a robot and a parameter box.
+
+Synthesis is separate from running: :func:`synthesize` validates the gains, builds the bound
+method once (its model copies and constant matrices), and returns a controller whose only
+internal state is explicit, so the same controller can be simulated many times.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from .bounds import default_method, make_bound
+from .control.interval import IntervalPassivityController
+from .errors import InputError
+from .robot import Robot
+from .uncertainty import ParameterBox
+
+
+def synthesize(
+    robot: Robot,
+    box: ParameterBox,
+    epsilon: float,
+    *,
+    method: str | None = None,
+    kappa_P: float = 2.0,
+    kappa_I: float = 1.0,
+    phi_P: float = 1.0,
+    phi_I: float = 1e6,
+    Kr: float | Sequence[float] | np.ndarray | None = None,
+) -> IntervalPassivityController:
+    """The paper's controller for ``robot`` with uncertain parameters in ``box``.
+
+    Theorem 2 (adaptive gains) when ``box.disturbance_bound`` is ``None``, Theorem 1 (constant
+    gains ``kappa_P``, ``phi_P``, disturbance included in the enclosure) otherwise. Defaults are the
+    paper's gains.
+
+    Args:
+        robot: The nominal robot (payloads of ``box`` are attached at their nominal point).
+        box: Uncertain link parameters and the disturbance bound.
+        epsilon: Required tracking precision ``||q_d - q|| < epsilon`` [rad], finite, > 0.
+        method: Bound method name (``urpc.bounds.METHODS``); ``None`` picks
+            :func:`urpc.bounds.default_method` for the box.
+        kappa_P: [s/rad], >= 1 (Theorem 1).
+        kappa_I: [1/rad^2], > 0 (Theorem 2).
+        phi_P: [N m s/rad], >= 1 (Theorem 1).
+        phi_I: [N m/rad^2], > 0 (Theorem 2).
+        Kr: Diagonal gain [1/s]: a positive scalar, ``dof`` positive numbers, or a diagonal
+            ``dof x dof`` matrix; ``None`` gives the paper's ``3 / sqrt(epsilon)``.
+
+    Raises:
+        InputError: a gain or ``epsilon`` out of range (the message names the field and the valid
+            range), an unknown bound method.
+    """
+    epsilon = _number("epsilon", epsilon, "a finite number > 0 [rad]", lambda x: x > 0)
+    kappa_P = _number("kappa_P", kappa_P, "a finite number >= 1 (Theorem 1)", lambda x: x >= 1)
+    phi_P = _number("phi_P", phi_P, "a finite number >= 1 (Theorem 1)", lambda x: x >= 1)
+    kappa_I = _number("kappa_I", kappa_I, "a finite number > 0 (Theorem 2)", lambda x: x > 0)
+    phi_I = _number("phi_I", phi_I, "a finite number > 0 (Theorem 2)", lambda x: x > 0)
+    gains = _gain_matrix(Kr, epsilon, robot.dof)
+    if method is None:
+        method = default_method(box)
+    bound = make_bound(method, robot, box)
+    return IntervalPassivityController(
+        bound, epsilon, kappa_P=kappa_P, kappa_I=kappa_I, phi_P=phi_P, phi_I=phi_I, Kr=gains
+    )
+
+
+def _number(field: str, value, expected: str, valid) -> float:
+    if isinstance(value, bool):
+        raise InputError(f"{value!r} is not a number; expected {expected}", field=field)
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{value!r} is not a number; expected {expected}", field=field) from None
+    if not math.isfinite(number) or not valid(number):
+        raise InputError(f"{value!r} is out of range; expected {expected}", field=field)
+    return number
+
+
+def _gain_matrix(Kr, epsilon: float, dof: int) -> np.ndarray:
+    """The diagonal of ``Kr`` [1/s] (length ``dof``)."""
+    if Kr is None:
+        return np.full(dof, 3.0 / math.sqrt(epsilon))
+    expected = f"a scalar, {dof} numbers or a diagonal {dof}x{dof} matrix, all finite and > 0 [1/s]"
+    try:
+        gains = np.array(Kr, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{Kr!r} is not numeric; expected {expected}", field="Kr") from None
+    if gains.ndim == 0:
+        gains = np.full(dof, float(gains))
+    elif gains.shape == (dof, dof):
+        if np.any(gains - np.diag(np.diag(gains))):
+            raise InputError(f"the matrix is not diagonal; expected {expected}", field="Kr")
+        gains = np.diag(gains).copy()
+    elif gains.shape != (dof,):
+        raise InputError(f"shape {gains.shape} does not fit; expected {expected}", field="Kr")
+    if not np.all(np.isfinite(gains)) or np.any(gains <= 0):
+        raise InputError(
+            f"{gains.tolist()} has an entry out of range; expected {expected}", field="Kr"
+        )
+    return gains
