@@ -1,0 +1,84 @@
+"""What every CLI command shares: the error contract, argument types, JSON output."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+
+EXIT_OK = 0
+EXIT_INPUT = 2
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse with the package's error contract: one ``error:`` line, exit code 2."""
+
+    def error(self, message: str):  # type: ignore[override]
+        raise InputError(f"{message} (see '{self.prog} --help')")
+
+
+def vector(text: str) -> np.ndarray:
+    """Parse ``"0.1,0.2"`` or ``"0.1 0.2"`` into a float vector (NaN/inf rejected)."""
+    parts = [p for p in text.replace(",", " ").split() if p]
+    try:
+        values = np.array([float(p) for p in parts])
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"'{text}' is not a list of numbers, e.g. 0.1,0.2"
+        ) from None
+    if values.size == 0 or not np.all(np.isfinite(values)):
+        raise argparse.ArgumentTypeError(f"'{text}' must be finite numbers, e.g. 0.1,0.2")
+    return values
+
+
+def names(text: str) -> list[str]:
+    return [p for p in text.replace(",", " ").split() if p]
+
+
+def add_robot_arguments(parser: argparse.ArgumentParser, uncertainty_required: bool = False):
+    parser.add_argument(
+        "robot", help="URDF path, built-in name (rr_planar) or example-robot-data name (ur5, panda)"
+    )
+    parser.add_argument(
+        "--uncertainty",
+        "-u",
+        type=Path,
+        required=uncertainty_required,
+        help="uncertainty YAML file (default for built-in robots: the robot's uncertainty.yaml)",
+    )
+    parser.add_argument(
+        "--lock",
+        type=names,
+        default=[],
+        metavar="JOINTS",
+        help="comma-separated joints to lock, e.g. panda_finger_joint1,panda_finger_joint2",
+    )
+
+
+def one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def print_json(payload: dict) -> None:
+    print(json.dumps(jsonable(payload), indent=2, allow_nan=False))
+
+
+def jsonable(value):
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return jsonable(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, Path):
+        return str(value)
+    return value

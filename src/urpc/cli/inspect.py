@@ -1,0 +1,182 @@
+"""Inspection commands: ``urpc robots``, ``urpc check``, ``urpc bound``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError
+from .common import EXIT_OK, add_robot_arguments, print_json, vector
+
+
+def register(commands) -> None:
+    p = commands.add_parser("robots", help="list the robots that can be loaded by name")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(handler=run_robots)
+
+    p = commands.add_parser(
+        "check",
+        help="validate a robot and an uncertainty file, print the box",
+        description="Load ROBOT, validate the uncertainty file against it, and print the box: "
+        "links, parameters, nominal values, bounds and relative widths.",
+    )
+    add_robot_arguments(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(handler=run_check)
+
+    p = commands.add_parser(
+        "bound",
+        help="enclose the mismatch torque w at one state",
+        description="Enclose the mismatch torque w = Y_SL (pi - pi0) - d over the box at one "
+        "state, and print lower, upper and rho = max(|lower|, |upper|) per joint [N m].",
+    )
+    add_robot_arguments(p)
+    for name, what in (
+        ("q", "joint positions [rad]"),
+        ("qd", "joint velocities [rad/s]"),
+        ("qd-a", "reference velocity qd_a [rad/s]"),
+        ("qdd-a", "reference acceleration qdd_a [rad/s^2]"),
+    ):
+        p.add_argument(f"--{name}", type=vector, required=True, help=f"{what}, comma-separated")
+    p.add_argument("--method", default=None, help="vertex, hull or rigorous (default: by box kind)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(handler=run_bound)
+
+
+def run_robots(args) -> int:
+    from ..catalog import builtin_robots, example_robot_data_robots
+
+    builtin = builtin_robots()
+    erd = example_robot_data_robots()
+    if args.json:
+        print_json(
+            {
+                "builtin": {n: str(e.urdf) for n, e in builtin.items()},
+                "example_robot_data": {n: str(e.urdf) for n, e in erd.items()},
+            }
+        )
+        return EXIT_OK
+    print("Built-in robots (with their uncertainty and parameter files):")
+    for name, entry in builtin.items():
+        extras = ", ".join(p.name for p in entry.files)
+        print(f"  {name:<24} {extras}")
+    print("\nexample-robot-data URDFs (loaded as fixed-base trees; a URDF with a joint type other")
+    print("than revolute, continuous, prismatic or fixed is refused with a message naming it):")
+    names = list(erd)
+    width = max((len(n) for n in names), default=0) + 2
+    per_line = max(1, 96 // width)
+    for i in range(0, len(names), per_line):
+        print("  " + "".join(n.ljust(width) for n in names[i : i + per_line]))
+    return EXIT_OK
+
+
+def load_robot_and_box(args):
+    from ..catalog import default_uncertainty
+    from ..robot import load_robot
+    from ..uncertainty import ParameterBox, load_uncertainty
+
+    robot = load_robot(args.robot, locked_joints=args.lock)
+    path = args.uncertainty or default_uncertainty(args.robot)
+    if path is None:
+        return robot, ParameterBox(links=()), None
+    return robot, load_uncertainty(path, robot), path
+
+
+def box_summary(robot, box) -> dict:
+    """A JSON-friendly description of a parameter box (used by ``urpc check``)."""
+    links = []
+    for link_box in box.links:
+        fields = []
+        for k, name in enumerate(link_box.fields):
+            lo, hi, nominal = link_box.lower[k], link_box.upper[k], link_box.nominal[k]
+            fields.append(
+                {
+                    "field": name,
+                    "nominal": nominal,
+                    "lower": lo,
+                    "upper": hi,
+                    "uncertain": bool(hi > lo),
+                    "relative_width": (hi - lo) / abs(nominal) if nominal != 0 else None,
+                }
+            )
+        links.append({"link": link_box.link, "kind": link_box.kind, "fields": fields})
+    return {
+        "robot": robot.name,
+        "urdf": str(robot.urdf_path),
+        "dof": robot.dof,
+        "joints": list(robot.joint_names),
+        "moving_links": list(robot.moving_link_names),
+        "uncertainty": box.source,
+        "disturbance": "unknown" if box.disturbance_bound is None else box.disturbance_bound,
+        "payloads": [{"name": p.name, "link": p.link} for p in box.payloads],
+        "uncertain_parameters": box.n_uncertain,
+        "links": links,
+    }
+
+
+def run_check(args) -> int:
+    robot, box, path = load_robot_and_box(args)
+    summary = box_summary(robot, box)
+    if args.json:
+        print_json(summary)
+        return EXIT_OK
+    print(f"robot       {robot.name} ({robot.dof} dof) from {robot.urdf_path}")
+    print(f"joints      {', '.join(robot.joint_names)}")
+    print(f"uncertainty {path if path else '(none: every parameter exact)'}")
+    dist = summary["disturbance"]
+    print(
+        f"disturbance {'unknown bound (Theorem 2, adaptive gains)' if dist == 'unknown' else f'||d|| <= {dist} N m (Theorem 1)'}"
+    )
+    for payload in box.payloads:
+        print(f"payload     '{payload.name}' fixed to link '{payload.link}'")
+    print(f"uncertain   {box.n_uncertain} parameters in {len(box.uncertain_links)} links\n")
+    header = f"  {'field':<8} {'nominal':>12} {'lower':>12} {'upper':>12} {'rel. width':>11}"
+    for entry in summary["links"]:
+        print(f"link '{entry['link']}' ({entry['kind']} box)")
+        print(header)
+        for f in entry["fields"]:
+            if not f["uncertain"]:
+                continue
+            rel = "-" if f["relative_width"] is None else f"{100 * f['relative_width']:.1f} %"
+            print(
+                f"  {f['field']:<8} {f['nominal']:>12.6g} {f['lower']:>12.6g} {f['upper']:>12.6g} "
+                f"{rel:>11}"
+            )
+        exact = [f["field"] for f in entry["fields"] if not f["uncertain"]]
+        if exact:
+            print(f"  exact: {', '.join(exact)}")
+        print()
+    return EXIT_OK
+
+
+def run_bound(args) -> int:
+    from ..bounds import default_method, make_bound
+
+    robot, box, _ = load_robot_and_box(args)
+    vectors = {"q": args.q, "qd": args.qd, "qd-a": args.qd_a, "qdd-a": args.qdd_a}
+    for name, value in vectors.items():
+        if value.shape != (robot.dof,):
+            raise InputError(
+                f"--{name} has {value.size} values but {robot.name} has {robot.dof} joints "
+                f"({', '.join(robot.joint_names)})",
+                field=name,
+            )
+    method = args.method or default_method(box)
+    bound = make_bound(method, robot, box)
+    lower, upper = bound.enclose(args.q, args.qd, args.qd_a, args.qdd_a)
+    rho = np.maximum(np.abs(lower), np.abs(upper))
+    if args.json:
+        print_json(
+            {
+                "method": method,
+                "joints": list(robot.joint_names),
+                "lower": lower,
+                "upper": upper,
+                "rho": rho,
+            }
+        )
+        return EXIT_OK
+    print(f"method {method}; mismatch torque w enclosure [N m]")
+    print(f"  {'joint':<24} {'lower':>14} {'upper':>14} {'rho':>14}")
+    for name, lo, hi, r in zip(robot.joint_names, lower, upper, rho, strict=True):
+        print(f"  {name:<24} {lo:>14.6g} {hi:>14.6g} {r:>14.6g}")
+    return EXIT_OK
