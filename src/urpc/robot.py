@@ -340,12 +340,16 @@ def _read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
 
     # Check well-formedness first: the C++ URDF parser prints its own lines on stderr otherwise.
     try:
-        ElementTree.parse(path)
+        root = ElementTree.parse(path).getroot()
     except ElementTree.ParseError as exc:
         raise InputError(f"malformed XML ({exc})", source=path) from None
     except OSError as exc:
         raise InputError(f"cannot read the file ({exc})", source=path) from None
-
+    if root.tag != "robot" or not root.get("name"):
+        raise InputError(
+            f"not a URDF: the root element must be <robot name=...>, found <{root.tag}>",
+            source=path,
+        )
     try:
         urdf = yourdfpy.URDF.load(
             str(path), load_meshes=False, build_scene_graph=False, load_collision_meshes=False

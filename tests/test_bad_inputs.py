@@ -1,0 +1,181 @@
+"""The bad-input catalog: every malformed input gives one clear error, through the API (a typed
+exception) and through the CLI (exit code 2, one stderr line starting with 'error:', no traceback,
+naming the file and the field), and leaves no partial output behind.
+
+Each case builds its files in a temporary folder, then states the CLI arguments, the API call and
+the words the message must contain.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import RR_DIR
+
+import urpc
+from urpc.cli import main
+from urpc.errors import InputError, UrpcError
+
+RR_URDF = (RR_DIR / "rr_planar.urdf").read_text()
+RR_BOX = (RR_DIR / "uncertainty.yaml").read_text()
+
+
+def _rr_with(old: str, new: str) -> str:
+    assert old in RR_URDF, old
+    return RR_URDF.replace(old, new, 1)
+
+
+LINK2_INERTIA = (
+    '<inertia ixx="1.6666666666666667" ixy="0" ixz="0"\n'
+    '               iyy="0.4166666666666667" iyz="0" izz="1.6666666666666667"/>'
+)
+LINK2_MASS = '<mass value="5.0"/>'
+LINK2_INERTIAL = RR_URDF[RR_URDF.index("<inertial>", RR_URDF.index('<link name="link2">')) :]
+LINK2_INERTIAL = LINK2_INERTIAL[: LINK2_INERTIAL.index("</inertial>") + len("</inertial>")]
+
+
+@dataclass
+class Case:
+    """One bad input: files to write, the CLI arguments and the API call that must fail."""
+
+    files: dict[str, str]
+    argv: list[str]
+    api: Callable[[Path], object] | None
+    words: tuple[str, ...]
+    exception: type[Exception] = InputError
+    names_file: str | None = None  # the file the message must name (default: the first file)
+    extra: dict = field(default_factory=dict)
+
+
+def _check(robot: str, box: str | None = None) -> list[str]:
+    argv = ["check", robot]
+    return argv + (["--uncertainty", box] if box else [])
+
+
+def _bound(*vectors: str, method: str | None = None) -> list[str]:
+    argv = ["bound", "rr_planar"]
+    for name, value in zip(("--q", "--qd", "--qd-a", "--qdd-a"), vectors, strict=True):
+        argv += [name, value]
+    return argv + (["--method", method] if method else [])
+
+
+def _load_box(robot_path: str, box_path: str):
+    def call(tmp: Path):
+        robot = urpc.load_robot(tmp / robot_path if robot_path.endswith(".urdf") else robot_path)
+        return urpc.load_uncertainty(tmp / box_path, robot)
+
+    return call
+
+
+def _box_case(text: str, *words: str) -> Case:
+    return Case(
+        {"box.yaml": text},
+        _check("rr_planar", "{tmp}/box.yaml"),
+        _load_box("rr_planar", "box.yaml"),
+        words,
+    )
+
+
+def _urdf_case(text: str, *words: str) -> Case:
+    return Case(
+        {"arm.urdf": text},
+        _check("{tmp}/arm.urdf"),
+        lambda tmp: urpc.load_robot(tmp / "arm.urdf"),
+        words,
+    )
+
+
+ZERO_INERTIA = '<inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>'
+
+CASES: dict[str, Case] = {
+    # ---------------------------------------------------------------- URDF files
+    "urdf_missing": Case({}, _check("{tmp}/none.urdf"), lambda tmp: urpc.load_robot(tmp / "none.urdf"), ("does not exist",), names_file="none.urdf"),
+    "urdf_malformed_xml": _urdf_case(RR_URDF[:-40], "malformed XML"),
+    "urdf_not_a_robot": _urdf_case("<html><body/></html>", "not a URDF", "<robot name=...>"),
+    "urdf_empty_file": _urdf_case("", "malformed XML"),
+    "urdf_floating_base": _urdf_case(_rr_with('name="joint1" type="revolute"', 'name="joint1" type="floating"'), "joint 'joint1'", "'floating'", "revolute"),
+    "urdf_planar_joint": _urdf_case(_rr_with('name="joint2" type="revolute"', 'name="joint2" type="planar"'), "joint 'joint2'", "'planar'"),
+    "urdf_link_without_inertial": _urdf_case(_rr_with(LINK2_INERTIAL, ""), "joint 'joint2' moves no mass", "<inertial>"),
+    "urdf_zero_mass": _urdf_case(_rr_with(LINK2_MASS, '<mass value="0"/>').replace(LINK2_INERTIA, ZERO_INERTIA), "joint 'joint2' moves no mass"),
+    "urdf_negative_mass": _urdf_case(_rr_with(LINK2_MASS, '<mass value="-5"/>'), "link.link2.inertial", ">= 0"),
+    "urdf_inertia_not_psd": _urdf_case(_rr_with(LINK2_INERTIA, '<inertia ixx="1" ixy="0" ixz="0" iyy="-1" iyz="0" izz="1"/>'), "link.link2.inertial", "positive semi-definite"),
+    "robot_unknown_name": Case({}, _check("ur55"), lambda tmp: urpc.load_robot("ur55"), ("unknown robot 'ur55'", "did you mean"), names_file=""),
+    "locked_joint_unknown": Case({}, ["check", "panda", "--lock", "panda_finger"], lambda tmp: urpc.load_robot("panda", locked_joints=["panda_finger"]), ("cannot lock unknown joint", "panda_finger_joint1"), names_file=""),
+    # ---------------------------------------------------------------- uncertainty files
+    "box_missing_file": Case({}, _check("rr_planar", "{tmp}/none.yaml"), _load_box("rr_planar", "none.yaml"), ("does not exist",), names_file="none.yaml"),
+    "box_yaml_syntax": _box_case("links:\n  link2:\n    mass: [5, 10\n", "YAML syntax error at line"),
+    "box_yaml_tabs": _box_case("links:\n\tlink2: {}\n", "YAML syntax error"),
+    "box_top_level_list": _box_case("- link2\n", "expected a mapping"),
+    "box_lo_greater_than_hi": _box_case("links: {link2: {mass: [10, 5]}}", "links.link2.mass", "greater than"),
+    "box_zero_mass": _box_case("links: {link2: {mass: [0, 10]}}", "links.link2.mass", "strictly positive"),
+    "box_nominal_outside": _box_case("links: {link2: {com_x: [0.6, 0.7]}}", "links.link2.com_x", "outside the box"),
+    "box_unknown_link": _box_case("links: {link9: {mass: 10%}}", "links.link9", "link1, link2"),
+    "box_unknown_key": _box_case("links: {link2: {mas: 10%}}", "links.link2.mas", "did you mean 'mass'"),
+    "box_unknown_barycentric_key": _box_case("links: {link2: {barycentric: {mx: 1%}}}", "links.link2.barycentric.mx", "h_x"),
+    "box_wrong_type": _box_case("links: {link2: {mass: heavy}}", "links.link2.mass", "not a number"),
+    "box_three_ends": _box_case("links: {link2: {mass: [1, 2, 3]}}", "links.link2.mass", "3 entries"),
+    "box_infinite_end": _box_case("links: {link2: {mass: [5, .inf]}}", "links.link2.mass", "non-finite"),
+    "box_negative_width": _box_case("links: {link2: {mass: '-10%'}}", "links.link2.mass", "negative width"),
+    "box_bad_disturbance": _box_case("disturbance: lots", "disturbance", "'unknown'"),
+    "box_payload_unknown_link": _box_case("payload: {link: hand, mass: [0, 1]}", "payload.link", "link1, link2"),
+    "box_payload_name_clash": _box_case("payload: {name: link1, link: link2, mass: [0, 1]}", "payload.name", "already a link"),
+    "box_non_physical_nominal": Case(
+        {"arm.urdf": _rr_with(LINK2_INERTIA, '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="1"/>'), "box.yaml": "links: {link2: {mass: [5, 10]}}"},
+        _check("{tmp}/arm.urdf", "{tmp}/box.yaml"), _load_box("arm.urdf", "box.yaml"), ("links.link2", "triangle inequality"), names_file="box.yaml",
+    ),
+    # ---------------------------------------------------------------- states and methods
+    "bound_wrong_length": Case({}, _bound("0.1", "0,0", "0,0", "0,0"), None, ("--q has 1 values", "2 joints"), names_file=""),
+    "bound_nan_state": Case({}, _bound("nan,0", "0,0", "0,0", "0,0"), None, ("finite",), names_file=""),
+    "bound_inf_state": Case({}, _bound("0,0", "inf,0", "0,0", "0,0"), None, ("finite",), names_file=""),
+    "bound_unknown_method": Case({}, _bound("0,0", "0,0", "0,0", "0,0", method="interval"), lambda tmp: urpc.make_bound("interval", urpc.load_robot("rr_planar"), None), ("unknown bound method", "hull"), names_file=""),
+}  # fmt: skip
+
+
+def _materialize(case: Case, tmp_path: Path) -> list[str]:
+    for name, text in case.files.items():
+        (tmp_path / name).write_text(text)
+    return [arg.replace("{tmp}", str(tmp_path)) for arg in case.argv]
+
+
+def test_catalog_has_at_least_thirty_cases():
+    assert len(CASES) >= 30
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_cli_exit_2_with_one_line(name, tmp_path, capsys):
+    case = CASES[name]
+    argv = _materialize(case, tmp_path)
+    before = sorted(tmp_path.rglob("*"))
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.startswith("error: ") and err.count("\n") == 1, err
+    assert "Traceback" not in err
+    for word in case.words:
+        assert word in err, f"{word!r} not in {err!r}"
+    names_file = case.names_file if case.names_file is not None else next(iter(case.files), "")
+    if names_file:
+        assert names_file in err
+    assert sorted(tmp_path.rglob("*")) == before  # nothing written
+
+
+@pytest.mark.parametrize("name", sorted(n for n, c in CASES.items() if c.api is not None))
+def test_api_raises_typed_error(name, tmp_path):
+    case = CASES[name]
+    _materialize(case, tmp_path)
+    with pytest.raises(case.exception) as info:
+        case.api(tmp_path)
+    assert isinstance(info.value, UrpcError)
+    for word in case.words:
+        assert word in str(info.value)
+
+
+def test_bound_rejects_wrong_shapes_in_the_api():
+    robot = urpc.load_robot("rr_planar")
+    box = urpc.load_uncertainty(RR_DIR / "uncertainty.yaml", robot)
+    bound = urpc.make_bound("hull", robot, box)
+    with pytest.raises((InputError, ValueError)):
+        bound.enclose(np.zeros(3), np.zeros(2), np.zeros(2), np.zeros(2))
