@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -287,3 +288,45 @@ def test_scenario3_meets_epsilon_with_unknown_disturbance(rr, rr_box, true_plant
     )
     assert result.metrics["met"], result.metrics
     assert np.linalg.norm(result.disturbance, axis=1).max() > 5.0  # the disturbance was real
+
+
+# ------------------------------------------------------------------ sampled-data gain limit
+def _panda_controller(sample_period):
+    import urpc
+
+    robot = urpc.load_robot("panda", locked_joints=["panda_finger_joint1", "panda_finger_joint2"])
+    box = urpc.load_uncertainty(
+        Path(__file__).resolve().parents[1] / "robots" / "panda" / "uncertainty.yaml", robot
+    )
+    return urpc.synthesize(robot, box, 1e-2, method="hull", sample_period=sample_period)
+
+
+def test_sampled_gain_limit_makes_every_nominal_mode_dead_beat_or_slower():
+    T = 1e-3
+    controller = _panda_controller(T)
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        q = rng.uniform(-1, 1, 7)
+        M0 = controller.robot.M(q)
+        for gain in (1.0, 50.0, 5e3):
+            # The feedback matrix K, column by column (the law is linear in r).
+            K = np.column_stack([controller._sampled_feedback(q, gain, e) for e in np.eye(7)])
+            np.testing.assert_allclose(K, K.T, atol=1e-9 * gain)
+            # Discrete modal gains T * eig(M0^-1 K) lie in (0, 1]: |1 - T lambda| < 1, stable.
+            modal = np.linalg.eigvals(np.linalg.solve(M0, K)).real * T
+            assert np.all(modal > 0) and np.all(modal <= 1 + 1e-9)
+            # Never more feedback than the paper's law, and exactly it where no mode is capped.
+            assert np.all(np.linalg.eigvalsh(gain * np.eye(7) - K) >= -1e-9 * gain)
+            if gain * T <= np.linalg.eigvalsh(M0).min():
+                np.testing.assert_allclose(K, gain * np.eye(7), atol=1e-9 * gain)
+
+
+def test_sampled_gain_limit_is_inactive_for_fast_sampling():
+    fast, paper = _panda_controller(1e-9), _panda_controller(None)
+    rng = np.random.default_rng(5)
+    q, qd = rng.uniform(-1, 1, 7), rng.normal(size=7)
+    ref = Reference(q + 0.01, qd + 0.1, rng.normal(size=7))
+    state = np.array([0.3])
+    np.testing.assert_allclose(
+        fast.output(0.0, q, qd, ref, state), paper.output(0.0, q, qd, ref, state), rtol=1e-12
+    )

@@ -30,6 +30,7 @@ def synthesize(
     phi_P: float = 1.0,
     phi_I: float = 1e6,
     Kr: float | Sequence[float] | np.ndarray | None = None,
+    sample_period: float | None = None,
 ) -> IntervalPassivityController:
     """The paper's controller for ``robot`` with uncertain parameters in ``box``.
 
@@ -49,6 +50,9 @@ def synthesize(
         phi_I: [N m/rad^2], > 0 (Theorem 2).
         Kr: Diagonal gain [1/s]: a positive scalar, ``dof`` positive numbers, or a diagonal
             ``dof x dof`` matrix; ``None`` gives the paper's ``3 / sqrt(epsilon)``.
+        sample_period: The control period [s] when the controller runs sampled (zero-order hold):
+            enables the sampled-data gain limit of :mod:`urpc.control.interval`, which keeps the
+            sampled loop stable on light joints. ``None``: the paper's law unchanged.
 
     Raises:
         InputError: a gain or ``epsilon`` out of range (the message names the field and the valid
@@ -60,11 +64,22 @@ def synthesize(
     kappa_I = _number("kappa_I", kappa_I, "a finite number > 0 (Theorem 2)", lambda x: x > 0)
     phi_I = _number("phi_I", phi_I, "a finite number > 0 (Theorem 2)", lambda x: x > 0)
     gains = _gain_matrix(Kr, epsilon, robot.dof)
+    if sample_period is not None:
+        sample_period = _number(
+            "sample_period", sample_period, "a finite number > 0 [s] or None", lambda x: x > 0
+        )
     if method is None:
         method = default_method(box)
     bound = make_bound(method, robot, box)
     return IntervalPassivityController(
-        bound, epsilon, kappa_P=kappa_P, kappa_I=kappa_I, phi_P=phi_P, phi_I=phi_I, Kr=gains
+        bound,
+        epsilon,
+        kappa_P=kappa_P,
+        kappa_I=kappa_I,
+        phi_P=phi_P,
+        phi_I=phi_I,
+        Kr=gains,
+        sample_period=sample_period,
     )
 
 

@@ -24,6 +24,21 @@ When the bound method works on the Slotine-Li regressor, one ``Y_SL(q, qd, qd_a,
 gives both the nominal torque ``Y_SL pi0`` and the enclosure, since
 ``M qdd_a + C qd_a + g = Y_SL pi`` (:mod:`urpc.regressor`).
 
+**Sampled-data gain limit** (optional; not in the paper). Under a zero-order hold of period ``T``
+the feedback ``v = -D r`` with ``D = kappa ||rho|| + phi`` discretizes, per eigen-mode ``i`` of the
+inertia matrix, to ``r+ = (1 - D T / lambda_i) r``: the sampled loop is unstable once
+``D T / lambda_i > 2``. ``rho`` is dominated by the heavy proximal joints while the lightest mode
+is often a wrist, so on a real arm at 1 kHz the paper's law can diverge although its
+continuous-time guarantee holds. With ``sample_period=T`` the controller applies::
+
+    v = -V diag(min(D, lambda_i / T)) V^T r,         M0(q) = V diag(lambda_i) V^T
+
+i.e. the gain of each mode is capped at the dead-beat value ``lambda_i / T`` of the nominal model
+(half the stability limit, which leaves a factor-2 margin on the true plant's inertia:
+stable while the true modal inertia exceeds ``lambda_i / 2``). Modes whose cap exceeds ``D`` get
+exactly the paper's law, and ``T -> 0`` recovers it everywhere. Where the cap is active the
+continuous-time argument of Theorem 2 does not apply (it does not apply to a sampled loop anyway).
+
 Build it with :func:`urpc.synthesis.synthesize`, which validates the gains.
 """
 
@@ -47,6 +62,8 @@ class IntervalPassivityController(Controller):
         kappa_P, kappa_I: Proportional [s/rad] and integral [1/rad^2] parts of ``kappa``.
         phi_P, phi_I: Proportional [N m s/rad] and integral [N m/rad^2] parts of ``phi``.
         Kr: Diagonal of ``Kr`` [1/s], length ``dof``.
+        sample_period: Control period ``T`` [s] for the sampled-data gain limit (module docstring);
+            ``None`` applies the paper's law unchanged.
 
     Attributes:
         adaptive: True for Theorem 2 (growing gains, one state), False for Theorem 1.
@@ -65,6 +82,7 @@ class IntervalPassivityController(Controller):
         phi_P: float,
         phi_I: float,
         Kr: np.ndarray,
+        sample_period: float | None = None,
     ):
         self.bound = bound
         self.robot = bound.robot
@@ -76,6 +94,7 @@ class IntervalPassivityController(Controller):
         self.n_states = 1 if self.adaptive else 0
         self.method = bound.name
         self.last_rho_norm = math.nan
+        self.sample_period = None if sample_period is None else float(sample_period)
         self._uses_regressor = bound.uses_regressor
         self._pi0 = np.asarray(self.robot.nominal_parameters, dtype=float)
         if self._uses_regressor:
@@ -84,9 +103,10 @@ class IntervalPassivityController(Controller):
 
     def __repr__(self) -> str:
         theorem = "Theorem 2, adaptive" if self.adaptive else "Theorem 1, constant gains"
+        limit = "" if self.sample_period is None else f", gain limit at T={self.sample_period:g} s"
         return (
             f"IntervalPassivityController({self.robot.name!r}, method={self.method!r}, "
-            f"epsilon={self.epsilon:g}, {theorem})"
+            f"epsilon={self.epsilon:g}, {theorem}{limit})"
         )
 
     def gains(self, state: np.ndarray) -> tuple[float, float]:
@@ -124,7 +144,15 @@ class IntervalPassivityController(Controller):
             gain = (self.kappa_P + self.kappa_I * s) * rho_norm + self.phi_P + self.phi_I * s
         else:
             gain = self.kappa_P * rho_norm + self.phi_P
+        if self.sample_period is not None:
+            return nominal + self._sampled_feedback(q, gain, r)
         return nominal + gain * r
+
+    def _sampled_feedback(self, q: np.ndarray, gain: float, r: np.ndarray) -> np.ndarray:
+        """``V diag(min(gain, lambda_i / T)) V^T r`` with ``M0(q) = V diag(lambda_i) V^T``."""
+        inertias, modes = np.linalg.eigh(self.robot.M(q))
+        modal_gain = np.minimum(gain, inertias / self.sample_period)
+        return modes @ (modal_gain * (modes.T @ r))
 
     def state_derivative(
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
