@@ -15,12 +15,15 @@ from urpc.control.r_alpha import PAPER_BETAS, RAlphaController
 from urpc.errors import InputError
 from urpc.scenario import (
     CONTROLLERS,
+    PLANT_BACKENDS,
     Scenario,
     build,
     build_controller,
     load_scenario,
     parse_scenario,
+    run_scenario,
     shipped_scenarios,
+    true_parameter_values,
 )
 from urpc.trajectories import PaperTrajectory, QuinticTrajectory, SinusoidTrajectory
 
@@ -43,7 +46,11 @@ def test_paper_scenarios_load_and_build(number, ic):
     assert scenario.disturbance == disturbance and scenario.epsilon == epsilon
     assert scenario.duration == 10.0 and scenario.controller == "interval"
     assert scenario.uncertainty == (RR_DIR / "uncertainty.yaml").resolve()
-    assert scenario.options == {"kappa_P": 2.0, "kappa_I": 1.0, "phi_P": 1.0, "phi_I": 1e6}
+    paper_gains = {"kappa_P": 2.0, "kappa_I": 1.0, "phi_P": 1.0, "phi_I": 1e6}
+    # Sampled paper scenarios run the paper's law unchanged (no sampled-data gain limit).
+    if period is not None:
+        paper_gains["sampled_gain_limit"] = False
+    assert scenario.options == paper_gains
     r_alpha = scenario.controller_options["r-alpha"]
     assert (r_alpha["r"], r_alpha["alpha"], r_alpha["Q"], r_alpha["eta"]) == (1e-2, 1, 35, 7e-5)
 
@@ -123,6 +130,8 @@ BAD = [
         "hull",
     ),
     ({"uncertainty": "nowhere.yaml"}, "uncertainty", "does not exist"),
+    ({"plant": "bullet"}, "plant", "valid: mujoco, pinocchio"),
+    ({"plant": "mujoco", "sample_period": "continuous"}, "plant", "give a sample_period"),
 ]
 
 
@@ -302,3 +311,48 @@ def test_scenario_defaults_are_consistent():
     scenario = Scenario(name="x", robot="rr_planar", uncertainty=RR_DIR / "uncertainty.yaml")
     assert set(scenario.controller_options) == set(CONTROLLERS)
     assert scenario.options == {}
+
+
+def test_plant_backend_key_reaches_the_run(tmp_path):
+    assert PLANT_BACKENDS == ("pinocchio", "mujoco")
+    scenario = load_scenario("rr_planar/s3_ic1")
+    assert scenario.plant == "pinocchio" and scenario.to_dict()["plant"] == "pinocchio"
+    result = run_scenario(scenario.with_overrides(duration=0.02))
+    assert result.info["plant"] == "pinocchio"
+    assert result.info["true_parameters"] == {
+        "link2": {"mass": 10.0, "com_x": 0.525, "iyy": pytest.approx(20 / 12)}
+    }
+    with pytest.raises(InputError, match="continuous time") as info:
+        load_scenario("rr_planar/s1_ic1").with_overrides(plant="mujoco")
+    assert info.value.field == "plant"
+    pytest.importorskip("mujoco")
+    path = write(tmp_path, minimal(plant="mujoco", duration=0.02, true_parameters="nominal"))
+    mujoco = run_scenario(load_scenario(path))
+    assert mujoco.info["plant"] == "mujoco" and mujoco.info["true_parameters"] == {}
+
+
+def test_sampled_true_parameters_are_named_in_the_description(tmp_path):
+    setup = build(load_scenario(write(tmp_path, minimal(seed=5))))
+    values = true_parameter_values(setup)["link2"]
+    assert set(values) == {"mass", "com_x", "iyy"}  # the uncertain fields of Table I
+    link = setup.box.link_box("link2")
+    for name, value in values.items():
+        assert value == setup.true_point["link2"][link.fields.index(name)]
+    description = setup.true_description
+    assert "(seed 5)" in description
+    assert f"mass = {values['mass']:.6g} kg" in description
+    assert f"com_x = {values['com_x']:.6g} m" in description
+    assert f"iyy = {values['iyy']:.6g} kg m^2" in description
+
+
+def test_sampled_gain_limit_follows_the_scenario():
+    paper = build(load_scenario("rr_planar/s3_ic1"))
+    assert build_controller(paper).sample_period is None
+    limited = build(
+        load_scenario("rr_planar/s3_ic1").with_overrides(
+            controller_options={"interval": {"sampled_gain_limit": True}}
+        )
+    )
+    assert build_controller(limited).sample_period == 1e-3
+    continuous = build(load_scenario("rr_planar/s1_ic1"))
+    assert build_controller(continuous).sample_period is None

@@ -344,6 +344,9 @@ def test_invalid_arguments_name_the_field(true_plant):
         (dict(duration=1.0, q0=[0, 0, 0]), "q0"),
         (dict(duration=1.0, torque_limit=0.0), "torque_limit"),
         (dict(duration=1.0, method="Euler"), "method"),
+        (dict(duration=1.0, sample_period=1e-3, plant_backend="bullet"), "plant"),
+        (dict(duration=1.0, plant_backend="mujoco"), "plant"),  # continuous time
+        (dict(duration=1.0, controller_state0=[1.0]), "controller_state0"),  # static law
     ]
     for kwargs, field in cases:
         with pytest.raises(InputError) as info:
@@ -352,3 +355,83 @@ def test_invalid_arguments_name_the_field(true_plant):
     with pytest.raises(InputError) as info:  # no epsilon to judge the run against
         simulate(true_plant, controller, trajectory, duration=1.0)
     assert info.value.field == "epsilon"
+
+
+# ----------------------------------------------------------------------------- backends, state
+def test_mujoco_backend_runs_the_same_sampled_loop(true_plant):
+    """The independent MuJoCo plant under the same zero-order-hold loop (PD plus gravity, 5 ms,
+    disturbance) follows the Pinocchio plant to rounding; both follow the textbook model."""
+    pytest.importorskip("mujoco")
+    kwargs = dict(
+        duration=0.3,
+        q0=[0.05, 0.0],
+        qd0=[0.0, 0.0],
+        sample_period=5e-3,
+        disturbance_bound=10.0,
+        seed=2,
+    )
+    runs = {
+        backend: simulate(
+            true_plant, PDPlusGravity(), PaperTrajectory(), plant_backend=backend, **kwargs
+        )
+        for backend in ("pinocchio", "mujoco")
+    }
+    assert (
+        runs["mujoco"].info["plant"] == "mujoco" and runs["pinocchio"].info["plant"] == "pinocchio"
+    )
+    np.testing.assert_allclose(runs["mujoco"].q, runs["pinocchio"].q, atol=1e-10)
+    np.testing.assert_allclose(runs["mujoco"].torque, runs["pinocchio"].torque, atol=1e-6)
+    # and the textbook model, one period integrated by DOP853 under the recorded torque
+    k, t = 10, runs["mujoco"].t[10]
+    x = np.concatenate((runs["mujoco"].q[k], runs["mujoco"].qd[k]))
+    u = runs["mujoco"].torque[k] + runs["mujoco"].disturbance[k]
+    step = solve_ivp(textbook_rhs(u), (t, t + 5e-3), x, method="DOP853", rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(runs["mujoco"].q[k + 1], step.y[:2, -1], atol=1e-9)
+
+
+class Shifted:
+    """A trajectory delayed by ``offset`` [s]: ``reference(t) = trajectory.reference(t + offset)``."""
+
+    def __init__(self, trajectory, offset: float):
+        self.trajectory, self.offset = trajectory, offset
+
+    def reference(self, t: float) -> Reference:
+        return self.trajectory.reference(t + self.offset)
+
+
+def test_controller_state0_continues_a_run(rr, rr_box, true_plant):
+    """A 0.4 s run equals a 0.2 s run continued from its final plant and controller state."""
+    controller = synthesize(rr, rr_box, 1e-2)
+    trajectory = PaperTrajectory()
+    kwargs = dict(sample_period=1e-3)
+    whole = simulate(
+        true_plant, controller, trajectory, duration=0.4, q0=[0.02, -0.02], qd0=[0, 0], **kwargs
+    )
+    first = simulate(
+        true_plant, controller, trajectory, duration=0.2, q0=[0.02, -0.02], qd0=[0, 0], **kwargs
+    )
+    state = first.info["controller_state_final"]
+    assert state[0] > 0  # the dead-zone integral has grown: ||e|| = 0.028 > epsilon at first
+    continued = simulate(
+        true_plant,
+        controller,
+        Shifted(trajectory, 0.2),
+        duration=0.2,
+        q0=first.q[-1],
+        qd0=first.qd[-1],
+        controller_state0=state,
+        **kwargs,
+    )
+    np.testing.assert_allclose(continued.q, whole.q[200:], atol=1e-9)
+    np.testing.assert_allclose(continued.torque, whole.torque[200:], rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(continued.phi, whole.phi[200:], rtol=1e-12)
+    restarted = simulate(
+        true_plant,
+        controller,
+        Shifted(trajectory, 0.2),
+        duration=0.2,
+        q0=first.q[-1],
+        qd0=first.qd[-1],
+        **kwargs,
+    )
+    assert restarted.phi[0] == controller.phi_P < continued.phi[0]

@@ -78,6 +78,8 @@ class Plant(ABC):
         self._q = np.zeros(robot.dof)
         self._qd = np.zeros(robot.dof)
         self.time = 0.0
+        self._last_duration = math.nan
+        self._last_substeps = 1
 
     @property
     def dof(self) -> int:
@@ -108,18 +110,32 @@ class Plant(ABC):
             InputError: a torque of the wrong length or non-finite, a duration that is not > 0.
             SimulationError: the state became non-finite (the plant diverged).
         """
-        tau = _vector("torque", torque, self.dof)
-        duration = _positive("duration", duration, "a finite number > 0 [s]")
-        substeps = max(1, math.ceil(duration / self.max_step - 1e-9))
+        # The simulator calls this once per control period: validate cheaply (shape and one
+        # finiteness test on dot products) and cache the substep count of the last duration.
+        if (
+            type(torque) is np.ndarray
+            and torque.shape == (self.dof,)
+            and math.isfinite(torque @ torque)
+        ):
+            tau = torque
+        else:
+            tau = _vector("torque", torque, self.dof)
+        if duration != self._last_duration:
+            duration = _positive("duration", duration, "a finite number > 0 [s]")
+            self._last_substeps = max(1, math.ceil(duration / self.max_step - 1e-9))
+            self._last_duration = duration
+        substeps = self._last_substeps
         q, qd = self._advance(tau, duration / substeps, substeps)
-        if not (np.isfinite(q).all() and np.isfinite(qd).all()):
+        if not math.isfinite(q @ q + qd @ qd):
             raise SimulationError(
                 f"the {self.kind} plant diverged at t = {self.time + duration:.6g} s "
                 f"(q = {np.round(q, 6).tolist()}, qd = {np.round(qd, 6).tolist()})"
             )
         self._q, self._qd = q, qd
         self.time += duration
-        return self.state
+        # Fresh arrays every step (not copies of internal buffers the next step reuses); the
+        # caller must not modify them in place.
+        return PlantState(q, qd)
 
     @abstractmethod
     def _load_state(self) -> None:

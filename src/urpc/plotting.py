@@ -8,6 +8,8 @@ headless (no display, no global figure registry); save it with ``figure.savefig(
 * :func:`plot_error` - ``||e||`` on a log scale with the ``epsilon`` line (Figs. 2, 3);
 * :func:`plot_torque` - the commanded joint torques (Figs. 2-5);
 * :func:`plot_overview` - error and torques of one run stacked (Figs. 2, 3);
+* :func:`plot_errors` - error norms of several runs overlaid, with ``epsilon`` (e.g. both
+  initial conditions of one scenario);
 * :func:`compare` - error norms and torques of several runs overlaid (Figs. 4, 5).
 """
 
@@ -25,6 +27,7 @@ if TYPE_CHECKING:
 
 _JOINT_STYLES = ("-", "--", "-.", ":")
 _FLOOR = 1e-12  # [rad] floor of log-scale error plots (an exact zero has no logarithm)
+_DECADES_BELOW_EPSILON = 1e-6  # error plots show at most 6 decades below epsilon
 
 
 def describe(result: SimulationResult) -> str:
@@ -110,6 +113,32 @@ def plot_overview(result: SimulationResult) -> Figure:
     return figure
 
 
+def plot_errors(
+    results: Sequence[SimulationResult],
+    *,
+    labels: Sequence[str] | None = None,
+    title: str | None = None,
+) -> Figure:
+    """``||e(t)||`` [rad] of several runs on one log-scale axis, with each run's ``epsilon``.
+
+    Args:
+        results: Runs to overlay.
+        labels: Legend entries (default: ``scenario, controller`` of each run).
+        title: Figure title (default: the first run's :func:`describe`).
+    """
+    if not results:
+        raise ValueError("plot_errors() needs at least one result")
+    if labels is None:
+        labels = [", ".join(p for p in (r.scenario, r.controller) if p) for r in results]
+    if len(labels) != len(results):
+        raise ValueError(f"{len(labels)} labels for {len(results)} results")
+    figure = Figure(figsize=(7.0, 3.6), layout="constrained")
+    axes = figure.add_subplot()
+    _error_axes(axes, results, labels=list(labels))
+    axes.set_title(title or f"Tracking error - {describe(results[0])}")
+    return figure
+
+
 def compare(
     results: Sequence[SimulationResult],
     *,
@@ -158,9 +187,18 @@ def compare(
 
 def _error_axes(axes: Axes, results: Sequence[SimulationResult], labels: Sequence[str]) -> None:
     epsilons = set()
+    smallest = np.inf
     for result, label in zip(results, labels, strict=True):
-        axes.semilogy(result.t, np.maximum(result.error_norm, _FLOOR), lw=0.9, label=label)
+        norm = result.error_norm
+        axes.semilogy(result.t, np.maximum(norm, _FLOOR), lw=0.9, label=label)
         epsilons.add(float(result.epsilon))
+        positive = norm[norm > 0]
+        if positive.size:
+            smallest = min(smallest, float(positive.min()))
+    # An exact zero (a run starting on the reference) would stretch the axis down to the floor.
+    bottom = max(smallest, _DECADES_BELOW_EPSILON * min(epsilons))
+    if np.isfinite(bottom):
+        axes.set_ylim(bottom=0.5 * bottom)
     for epsilon in sorted(epsilons):
         axes.axhline(epsilon, color="k", ls="--", lw=1.0, label=f"$\\varepsilon$ = {epsilon:g} rad")
     if len(results) == 1:

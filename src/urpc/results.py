@@ -13,6 +13,7 @@ import math
 import os
 import shutil
 import tempfile
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
 from functools import cached_property
 from pathlib import Path
@@ -122,49 +123,23 @@ class SimulationResult:
         )
 
     # ------------------------------------------------------------------ files
-    def save(self, directory: str | Path) -> Path:
-        """Write ``result.npz`` (every series and the metadata), ``result.csv`` and
-        ``summary.json`` into ``directory`` (created if missing), atomically.
-
-        A new directory is assembled under a temporary name and renamed into place; an existing
-        one receives each file through a temporary file and ``os.replace``. Either way a failure
-        leaves no partial file behind.
+    def save(self, directory: str | Path, *, csv: bool = True) -> Path:
+        """Write ``result.npz`` (every series and the metadata), ``result.csv`` (unless ``csv`` is
+        false: a 10 kHz, 10 s run makes a ~7 MB table) and ``summary.json`` into ``directory``
+        (created with its parents if missing), atomically (:func:`write_files`).
 
         Returns:
             The directory.
         """
-        directory = Path(directory)
-        writers = {
-            NPZ_NAME: self._write_npz,
-            CSV_NAME: self._write_csv,
-            SUMMARY_NAME: self._write_summary,
-        }
-        if directory.is_dir():
-            temporaries = []
-            try:
-                for name, write in writers.items():
-                    handle, temporary = tempfile.mkstemp(
-                        prefix=f".{name}.", suffix=".tmp", dir=directory
-                    )
-                    os.close(handle)
-                    temporaries.append((Path(temporary), directory / name))
-                    write(Path(temporary))
-                for temporary, final in temporaries:
-                    os.replace(temporary, final)
-            finally:
-                for temporary, _ in temporaries:
-                    temporary.unlink(missing_ok=True)
-            return directory
-        directory.parent.mkdir(parents=True, exist_ok=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", dir=directory.parent))
-        try:
-            for name, write in writers.items():
-                write(staging / name)
-            os.rename(staging, directory)
-        except BaseException:
-            shutil.rmtree(staging, ignore_errors=True)
-            raise
-        return directory
+        return write_files(directory, self.writers(csv=csv))
+
+    def writers(self, *, csv: bool = True) -> dict[str, Callable[[Path], None]]:
+        """File name -> function writing that file, for :meth:`save` and :func:`write_files`."""
+        writers = {NPZ_NAME: self._write_npz, CSV_NAME: self._write_csv}
+        if not csv:
+            del writers[CSV_NAME]
+        writers[SUMMARY_NAME] = self._write_summary
+        return writers
 
     @classmethod
     def load(cls, directory: str | Path) -> SimulationResult:
@@ -258,6 +233,45 @@ class SimulationResult:
             "error": plot_error(self),
             "torque": plot_torque(self),
         }
+
+
+def write_files(directory: str | Path, writers: Mapping[str, Callable[[Path], None]]) -> Path:
+    """Write a set of files into ``directory`` so that a failure leaves no partial file behind.
+
+    ``writers`` maps a relative file name (``"summary.json"``, ``"runs/s1/result.npz"``) to a
+    function that writes that file at the path it is given. Every file is first written into a
+    staging directory; only when all are written do they move into place: a new ``directory``
+    (its parents are created) is the staging directory renamed, an existing one receives each file
+    by ``os.replace`` (other files in it are kept).
+
+    Returns:
+        The directory.
+    """
+    directory = Path(directory)
+    existing = directory.is_dir()
+    if existing:
+        parent = directory
+    else:
+        parent = directory.parent
+        parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", suffix=".tmp", dir=parent))
+    try:
+        for name, write in writers.items():
+            path = staging / name
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write(path)
+        if not existing:
+            os.rename(staging, directory)
+            return directory
+        for name in writers:
+            final = directory / name
+            final.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(staging / name, final)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    shutil.rmtree(staging, ignore_errors=True)
+    return directory
 
 
 def _json_float(value: float) -> float | None:

@@ -24,6 +24,7 @@ from .catalog import builtin_root
 from .control.base import Controller
 from .errors import InputError, did_you_mean
 from .expressions import evaluate
+from .plants import PLANTS
 from .robot import Robot, inertia_problem, load_robot
 from .trajectories import (
     TRAJECTORY_KINDS,
@@ -33,7 +34,13 @@ from .trajectories import (
     Trajectory,
     generic_trajectory,
 )
-from .uncertainty import ParameterBox, load_parameter_point, load_uncertainty, read_yaml
+from .uncertainty import (
+    UNITS,
+    ParameterBox,
+    load_parameter_point,
+    load_uncertainty,
+    read_yaml,
+)
 
 #: Controllers a scenario can run.
 CONTROLLERS = ("interval", "r-alpha", "computed-torque")
@@ -41,8 +48,10 @@ CONTROLLERS = ("interval", "r-alpha", "computed-torque")
 SCENARIO_KEYS = (
     "name", "description", "robot", "locked_joints", "uncertainty", "true_parameters",
     "trajectory", "initial_condition", "sample_period", "disturbance", "epsilon", "controller",
-    "controller_options", "duration", "seed", "torque_limit",
+    "controller_options", "duration", "seed", "torque_limit", "plant",
 )  # fmt: skip
+#: Plant backends a scenario can simulate with (``urpc.plants.PLANTS``).
+PLANT_BACKENDS = tuple(PLANTS)
 #: Folder of the scenarios shipped with the source tree.
 
 _TRAJECTORY_OPTIONS = {
@@ -119,6 +128,8 @@ class Scenario:
         duration: Simulated time [s].
         seed: Seed of the disturbance draws (and of a sampled true plant without its own seed).
         torque_limit: Per-joint torque bound [N m] (a number or one per joint); ``None``: none.
+        plant: Backend simulating the true plant (one of :data:`PLANT_BACKENDS`); ``mujoco``
+            needs a sampled run.
         locked_joints: Joints removed from the model: names (locked at 0) or name -> position.
         description: Free text.
         source: The file the scenario was read from.
@@ -142,6 +153,7 @@ class Scenario:
     duration: float = 10.0
     seed: int = 0
     torque_limit: float | tuple[float, ...] | None = None
+    plant: str = "pinocchio"
     locked_joints: tuple[str, ...] | Mapping[str, float] = ()
     description: str = ""
     source: Path | None = None
@@ -216,6 +228,7 @@ class Scenario:
             "duration": self.duration,
             "seed": self.seed,
             "torque_limit": _plain(self.torque_limit),
+            "plant": self.plant,
         }
 
 
@@ -317,6 +330,12 @@ def _check_consistency(scenario: Scenario, context: _Context) -> None:
             f"the sample period {scenario.sample_period:g} s is longer than the duration "
             f"{scenario.duration:g} s",
             "sample_period",
+        )
+    if scenario.sample_period is None and scenario.plant != "pinocchio":
+        raise context.error(
+            f"the {scenario.plant} plant steps under a held torque: give a sample_period [s], or "
+            "use plant: pinocchio for continuous time",
+            "plant",
         )
     if scenario.sample_period is None and scenario.disturbance > 0:
         raise context.error(
@@ -536,6 +555,15 @@ def _parse_controller(value: Any, context: _Context) -> str:
     return text
 
 
+def _parse_plant(value: Any, context: _Context) -> str:
+    text = _text(value, context, "plant")
+    if text not in PLANT_BACKENDS:
+        raise context.error(
+            f"unknown plant '{text}'; " + did_you_mean(text, PLANT_BACKENDS), "plant"
+        )
+    return text
+
+
 def _parse_torque_limit(value: Any, context: _Context) -> float | tuple[float, ...] | None:
     if value is None or value == "none":
         return None
@@ -550,8 +578,10 @@ def _parse_torque_limit(value: Any, context: _Context) -> float | tuple[float, .
 def _interval_option_names() -> tuple[str, ...]:
     from .synthesis import synthesize
 
+    # The sample period is the scenario's own; `sampled_gain_limit` says whether synthesis uses it.
     parameters = inspect.signature(synthesize).parameters.values()
-    return tuple(p.name for p in parameters if p.kind is inspect.Parameter.KEYWORD_ONLY)
+    names = [p.name for p in parameters if p.kind is inspect.Parameter.KEYWORD_ONLY]
+    return (*(n for n in names if n != "sample_period"), "sampled_gain_limit")
 
 
 def _parse_controller_options(value: Any, context: _Context) -> dict[str, dict[str, Any]]:
@@ -573,6 +603,10 @@ def _parse_controller_options(value: Any, context: _Context) -> dict[str, dict[s
 
 
 def _parse_option(controller: str, key: str, raw: Any, context: _Context, fieldname: str) -> Any:
+    if key == "sampled_gain_limit":
+        if not isinstance(raw, bool):
+            raise context.error(f"{raw!r} is not true or false", fieldname)
+        return raw
     if controller == "interval" and key == "method":
         from .bounds import METHODS
 
@@ -635,6 +669,7 @@ _PARSERS = {
     "duration": lambda v, c: _positive(v, c, "duration", "s"),
     "seed": lambda v, c: _integer(v, c, "seed"),
     "torque_limit": _parse_torque_limit,
+    "plant": _parse_plant,
 }
 
 
@@ -728,11 +763,23 @@ def _true_point(
         return {}, "true parameters = nominal parameters (no model error)"
     seed = scenario.seed if true.seed is None else true.seed
     point = sample_true_parameters(box, seed, context.source)
-    values = "; ".join(
-        f"{name}: " + ", ".join(f"{value:.6g}" for value in coordinates)
-        for name, coordinates in point.items()
+    return point, (
+        f"true parameters drawn uniformly from the box (seed {seed}): " + describe_point(box, point)
     )
-    return point, f"true parameters drawn uniformly from the box (seed {seed}): {values}"
+
+
+def describe_point(box: ParameterBox, point: Mapping[str, np.ndarray]) -> str:
+    """``link2: mass = 8.18 kg, com_x = 0.507 m, iyy = 1.17 kg m^2`` (uncertain fields only)."""
+    parts = []
+    for name, coordinates in point.items():
+        link_box = box.link_box(name)
+        fields = [
+            f"{field_name} = {coordinates[k]:.6g} {UNITS.get(field_name, 'kg m^2')}"
+            for k, field_name in enumerate(link_box.fields)
+            if link_box.uncertain[k]
+        ]
+        parts.append(f"{name}: {', '.join(fields) if fields else 'nominal'}")
+    return "; ".join(parts) if parts else "nominal"
 
 
 def sample_true_parameters(
@@ -830,6 +877,11 @@ def build_controller(setup: ScenarioSetup, controller: str | None = None) -> Con
     """Synthesize the scenario's controller (or ``controller``, one of :data:`CONTROLLERS`) with
     its options from the scenario.
 
+    ``interval`` options: the keyword arguments of :func:`urpc.synthesis.synthesize`, and
+    ``sampled_gain_limit`` (default true): in a sampled scenario, synthesize with the scenario's
+    sample period, which caps each inertia mode's gain at its dead-beat value (see
+    :mod:`urpc.control.interval`); ``false`` runs the paper's law unchanged.
+
     ``r-alpha`` options: ``betas: estimate`` (default,
     :func:`~urpc.control.r_alpha.estimate_betas`), ``paper`` (the paper's values) or explicit
     ``beta0..beta3``; its ``disturbance_bound`` (the bound the r-alpha designer assumes) defaults
@@ -847,6 +899,10 @@ def build_controller(setup: ScenarioSetup, controller: str | None = None) -> Con
         if name == "interval":
             from .synthesis import synthesize
 
+            # Sampled runs cap each inertia mode's gain at its dead-beat value unless the scenario
+            # asks for the paper's law unchanged (sampled_gain_limit: false).
+            if options.pop("sampled_gain_limit", True) and scenario.sample_period is not None:
+                options["sample_period"] = scenario.sample_period
             return synthesize(setup.robot, setup.box, scenario.epsilon, **options)
         if name == "computed-torque":
             from .control.computed_torque import synthesize_computed_torque
@@ -873,14 +929,27 @@ def build_controller(setup: ScenarioSetup, controller: str | None = None) -> Con
 def run_scenario(
     scenario: Scenario, controller: str | None = None, progress: Any = None
 ):  # -> urpc.results.SimulationResult
-    """Build, synthesize and simulate one scenario; returns the simulation result."""
-    from .simulation import simulate
+    """Build, synthesize and simulate one scenario; returns the simulation result.
 
+    ``progress`` is passed to :func:`urpc.simulation.simulate`. The result's ``info`` records the
+    plant backend (``plant``) and how the true parameters were chosen (``true_parameters``).
+    """
     setup = build(scenario)
     law = build_controller(setup, controller)
-    return simulate(
+    return simulate_setup(setup, law, progress=progress)
+
+
+def simulate_setup(
+    setup: ScenarioSetup, controller: Controller, progress: Any = None
+):  # -> urpc.results.SimulationResult
+    """Simulate a built scenario with a synthesized controller (the last step of
+    :func:`run_scenario`, for callers that want to inspect the setup or the controller)."""
+    from .simulation import simulate
+
+    scenario = setup.scenario
+    result = simulate(
         setup.plant,
-        law,
+        controller,
         setup.trajectory,
         duration=scenario.duration,
         q0=setup.q0,
@@ -893,4 +962,24 @@ def run_scenario(
         scenario=scenario.name,
         plant_description=setup.true_description,
         progress=progress,
+        plant_backend=scenario.plant,
     )
+    info = {**result.info, "true_parameters": true_parameter_values(setup)}
+    return dataclasses.replace(result, info=info)
+
+
+def true_parameter_values(setup: ScenarioSetup) -> dict[str, dict[str, float]]:
+    """The true values of the uncertain parameters, link -> field -> value (units of the
+    uncertainty format: kg, m, kg m^2); empty when the true plant is the nominal model."""
+    values: dict[str, dict[str, float]] = {}
+    for name, coordinates in setup.true_point.items():
+        try:
+            link_box = setup.box.link_box(name)
+        except KeyError:
+            continue
+        values[name] = {
+            field_name: float(coordinates[k])
+            for k, field_name in enumerate(link_box.fields)
+            if link_box.uncertain[k]
+        }
+    return values

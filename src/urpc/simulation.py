@@ -10,11 +10,13 @@ from Pinocchio's articulated-body algorithm. The plant sees ``sat(u) + d``: the 
   from the solver's dense output, the torque being re-evaluated at each grid point.
 * **Sampled** (scenarios 2, 3): at each sample ``t_k = k T`` the controller reads ``(q, qd)``,
   its output is held (zero-order hold) over ``[t_k, t_k + T)`` together with a disturbance ``d_k``
-  drawn uniformly in the ball ``||d|| <= disturbance_bound`` (seeded), and the plant is integrated
-  over the period by classical Runge-Kutta 4 with steps of at most ``integration_step``. Under a
-  held torque the plant alone is not stiff, so RK4 with ``1e-4`` s steps is accurate to far below
-  the tracking tolerances (``tests/test_simulation.py`` compares it with ten times finer steps).
-  The controller's state advances once per sample (:meth:`Controller.advance`).
+  drawn uniformly in the ball ``||d|| <= disturbance_bound`` (seeded), and a
+  :class:`~urpc.plants.Plant` of the chosen backend (``plant_backend``: ``pinocchio``, the
+  reference, or the independent ``mujoco`` one) integrates the period by classical Runge-Kutta 4
+  with steps of at most ``integration_step``. Under a held torque the plant alone is not stiff, so
+  RK4 with ``1e-4`` s steps is accurate to far below the tracking tolerances
+  (``tests/test_simulation.py`` compares it with ten times finer steps). The controller's state
+  advances once per sample (:meth:`Controller.advance`).
 
 A run that diverges (a non-finite value, ``|q|`` or ``|qd|`` above ``max_state``, a solver failure)
 raises :class:`~urpc.errors.SimulationError` naming the time and the state.
@@ -35,6 +37,7 @@ from scipy.integrate import solve_ivp
 
 from .control.base import Controller, Reference
 from .errors import InputError, SimulationError
+from .plants import PLANTS, Plant, make_plant
 from .results import SimulationResult
 from .robot import Robot
 
@@ -77,6 +80,8 @@ def simulate(
     scenario: str = "",
     plant_description: str | None = None,
     progress: bool | Callable[[float], Any] | Any | None = None,
+    plant_backend: str = "pinocchio",
+    controller_state0: np.ndarray | None = None,
 ) -> SimulationResult:
     """Simulate ``plant`` under ``controller`` tracking ``trajectory``.
 
@@ -106,6 +111,11 @@ def simulate(
         progress: ``None``; ``True`` for a tqdm bar on stderr; a callable receiving the fraction
             done in ``[0, 1]``; or a tqdm-like object (``update``, ``total``), advanced by
             ``total`` times the fraction done (``total`` is set to 100 when it is ``None``).
+        plant_backend: Plant of a sampled run, a key of :data:`urpc.plants.PLANTS`
+            (``pinocchio`` or ``mujoco``); continuous time needs ``pinocchio``.
+        controller_state0: The controller's internal state at ``t = 0`` (length
+            ``controller.n_states``), e.g. to continue a run after a tool change; ``None`` uses
+            ``controller.initial_state()``.
 
     Raises:
         InputError: an argument out of range (the message names it).
@@ -139,6 +149,19 @@ def simulate(
                 f"{torque_limit!r} is out of range; expected numbers > 0 [N m]",
                 field="torque_limit",
             )
+    if plant_backend not in PLANTS:
+        raise InputError(
+            f"unknown plant {plant_backend!r}; valid: {', '.join(PLANTS)}", field="plant"
+        )
+    if sample_period is None and plant_backend != "pinocchio":
+        raise InputError(
+            f"the {plant_backend} plant steps under a held torque: give a sample_period, or use "
+            "the pinocchio plant for continuous time",
+            field="plant",
+        )
+    state0 = controller.initial_state()
+    if controller_state0 is not None:
+        state0 = _vector("controller_state0", controller_state0, controller.n_states)
     common = dict(
         controller=controller.name,
         epsilon=epsilon,
@@ -149,7 +172,7 @@ def simulate(
         torque_limit=None if limit is None else tuple(float(x) for x in limit),
     )
     bar = _Progress(progress)
-    setup = _Setup(plant, controller, trajectory, duration, q0, qd0, limit, max_state, bar)
+    setup = _Setup(plant, controller, trajectory, duration, q0, qd0, state0, limit, max_state, bar)
     try:
         if sample_period is None:
             if disturbance_bound > 0:
@@ -168,7 +191,8 @@ def simulate(
                     field="sample_period",
                 )
             step = _positive("integration_step", integration_step, "a finite number > 0 [s]")
-            series, info = _sampled(setup, period, step, disturbance_bound, int(seed))
+            stepper = make_plant(plant_backend, plant, max_step=step)
+            series, info = _sampled(setup, stepper, period, disturbance_bound, int(seed))
             duration = float(series["t"][-1])
     finally:
         bar.close()
@@ -199,17 +223,15 @@ def describe_plant(plant: Robot) -> str:
 
 # ============================================================================== sampled
 def _sampled(
-    setup: _Setup, period: float, max_step: float, disturbance_bound: float, seed: int
+    setup: _Setup, stepper: Plant, period: float, disturbance_bound: float, seed: int
 ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-    plant, controller, trajectory = setup.plant, setup.controller, setup.trajectory
+    controller, trajectory = setup.controller, setup.trajectory
     q, qd, limit, bar = setup.q0, setup.qd0, setup.limit, setup.bar
-    n = plant.dof
+    n = stepper.dof
     n_periods = max(1, math.ceil(setup.duration / period - 1e-9))
     samples = n_periods + 1
     disturbance = ball_samples(samples, n, disturbance_bound, np.random.default_rng(seed))
-    substeps = max(1, math.ceil(period / max_step - 1e-9))
-    h = period / substeps
-    integrate = _rk4_integrator(plant, h, substeps)
+    stepper.reset(q, qd)
 
     rate = 1.0 / period
     if abs(rate - round(rate)) < 1e-9 * rate:  # k / rate is the exact decimal time: 0.0411 s
@@ -222,8 +244,9 @@ def _sampled(
     phi, kappa = np.full(samples, np.nan), np.full(samples, np.nan)
     saturated = np.zeros(samples, dtype=bool)
     step_times = np.empty(samples)
-    state = controller.initial_state()
+    state = setup.state0
     has_gains = bool(controller.diagnostics(state))
+    gains_of, gains = None, (np.nan, np.nan)
     report_every = max(1, samples // 200)
     bound = setup.max_state**2
     clock = time.perf_counter
@@ -238,16 +261,23 @@ def _sampled(
         qdes_series[k], qddes_series[k] = reference.q, reference.qd
         torque[k] = u
         if has_gains:
-            gains = controller.diagnostics(state)
-            phi[k], kappa[k] = gains.get("phi", np.nan), gains.get("kappa", np.nan)
+            if state is not gains_of:  # advance() returns the same array while nothing changes
+                named = controller.diagnostics(state)
+                gains_of, gains = state, (named.get("phi", np.nan), named.get("kappa", np.nan))
+            phi[k], kappa[k] = gains
         if k == n_periods:
             break
         if limit is not None:
             clipped = np.clip(u, -limit, limit)
             saturated[k] = np.any(clipped != u)
             u = clipped
-        q, qd = integrate(q, qd, u + disturbance[k])
-        # One dot product catches NaN, infinity and runaway (a non-finite u makes q non-finite).
+        if not u @ u < math.inf:  # NaN or overflow; the plant refuses non-finite torques
+            _diverged(t, q, qd, "non-finite or overflowing torque")
+        try:
+            q, qd = stepper.step(u + disturbance[k], period)
+        except SimulationError:
+            _diverged(t, q, qd, "the state became non-finite during the following period")
+        # One dot product catches runaway (and NaN, should the plant let one through).
         if not q @ q + qd @ qd <= bound:
             _diverged(t + period, q, qd, f"non-finite or ||(q, qd)|| above {setup.max_state:g}")
         state = next_state
@@ -269,7 +299,14 @@ def _sampled(
         saturated=saturated,
         step_time_median=float(np.median(step_times)),
     )
-    info = {"integrator": "rk4", "integration_step": h, "substeps": substeps}
+    substeps = max(1, math.ceil(period / stepper.max_step - 1e-9))
+    info = {
+        "plant": stepper.kind,
+        "integrator": "rk4",
+        "integration_step": period / substeps,
+        "substeps": substeps,
+        "controller_state_final": np.asarray(state, dtype=float).tolist(),
+    }
     return series, info
 
 
@@ -282,29 +319,6 @@ def ball_samples(count: int, dimension: int, radius: float, rng: np.random.Gener
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
     radii = radius * rng.random(count) ** (1.0 / dimension)
     return directions * radii[:, None]
-
-
-def _rk4_integrator(plant: Robot, h: float, substeps: int):
-    """``(q, qd, tau) -> (q, qd)`` after ``substeps`` RK4 steps of ``h`` under constant ``tau``."""
-    model, data = plant.model, plant.model.createData()
-    aba = pin.aba
-    configuration = (lambda q: q) if model.nq == model.nv else plant.configuration
-    half, sixth = 0.5 * h, h / 6.0
-
-    def integrate(q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        for _ in range(substeps):
-            a1 = aba(model, data, configuration(q), v, tau)
-            v2 = v + half * a1
-            a2 = aba(model, data, configuration(q + half * v), v2, tau)
-            v3 = v + half * a2
-            a3 = aba(model, data, configuration(q + half * v2), v3, tau)
-            v4 = v + h * a3
-            a4 = aba(model, data, configuration(q + h * v3), v4, tau)
-            q = q + sixth * (v + 2.0 * (v2 + v3) + v4)
-            v = v + sixth * (a1 + 2.0 * (a2 + a3) + a4)
-        return q, v
-
-    return integrate
 
 
 # ============================================================================== continuous
@@ -346,7 +360,7 @@ def _continuous(
     runaway.terminal = True
     samples = max(2, int(round(duration * output_rate)) + 1)
     grid = np.linspace(0.0, duration, samples)
-    x0 = np.concatenate((setup.q0, setup.qd0, controller.initial_state()))
+    x0 = np.concatenate((setup.q0, setup.qd0, setup.state0))
     try:
         solution = solve_ivp(
             rhs,
@@ -400,11 +414,13 @@ def _continuous(
         step_time_median=float(np.median(step_times)),
     )
     info = {
+        "plant": "pinocchio",
         "integrator": method,
         "rtol": rtol,
         "atol": atol,
         "output_rate": output_rate,
         "rhs_evaluations": int(solution.nfev),
+        "controller_state_final": states[-1].tolist(),
     }
     return series, info
 
@@ -420,6 +436,7 @@ class _Setup:
     duration: float
     q0: np.ndarray
     qd0: np.ndarray
+    state0: np.ndarray
     limit: np.ndarray | None
     max_state: float
     bar: _Progress

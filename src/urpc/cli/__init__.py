@@ -13,10 +13,10 @@ import sys
 from collections.abc import Sequence
 
 from ..errors import UrpcError
-from . import inspect
+from . import campaign, demo, inspect, simulate
 from .common import EXIT_INPUT, EXIT_OK, Parser, one_line
 
-COMMAND_MODULES = [inspect]
+COMMAND_MODULES = [inspect, simulate, demo, campaign]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,197 @@
+"""Demo commands: ``urpc demo reconfigure`` and ``urpc demo tool-change``."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from .common import EXIT_OK, Parser, names, print_json
+
+
+def register(commands) -> None:
+    demo = commands.add_parser(
+        "demo",
+        help="run a demonstration (reconfigurable arm, tool change)",
+        description="Demonstrations of on-the-fly synthesis for modular arms.",
+    )
+    demos = demo.add_subparsers(dest="demo", metavar="DEMO", parser_class=Parser)
+    demos.required = True
+
+    p = demos.add_parser(
+        "reconfigure",
+        help="synthesize and simulate a sequence of arm configurations",
+        description="Run a sequence of modular-arm configurations (default: the shipped "
+        "assemblies arm_3dof, arm_4dof, arm_4dof_vacuum). Each one is composed from its modules, "
+        "loaded and given a controller with the same default settings, then simulated at 1 kHz "
+        "on a true plant drawn from its box under a disturbance the controller does not know. "
+        "Reports synthesis_time [s] (composition + model load + controller construction), met "
+        "and the metrics; writes OUT/reconfigure.png, OUT/reconfigure.json and OUT/<name>/.",
+    )
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=Path("urpc-results/reconfigure"),
+        help="output folder (default: urpc-results/reconfigure)",
+    )
+    p.add_argument(
+        "--assemblies",
+        type=names,
+        default=None,
+        metavar="NAMES",
+        help="comma-separated shipped assembly names or assembly files, in order "
+        "(default: arm_3dof,arm_4dof,arm_4dof_vacuum)",
+    )
+    _common_arguments(p)
+    p.set_defaults(handler=run_reconfigure)
+
+    p = demos.add_parser(
+        "tool-change",
+        help="change the payload during a run; the controller switches boxes without a restart",
+        description="Run the 4-DOF gripper arm (arm_4dof, about 1 kg); at --t-change the true "
+        "payload becomes about 3 kg (arm_4dof_3kg) and the controller switches to the new box, "
+        "keeping its internal state (phi, kappa). Reports the re-entry time into the epsilon "
+        "ball; writes OUT/tool_change.png and OUT/tool_change.json.",
+    )
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=Path("urpc-results/tool-change"),
+        help="output folder (default: urpc-results/tool-change)",
+    )
+    p.add_argument("--before", default="arm_4dof", help="configuration before (default arm_4dof)")
+    p.add_argument("--after", default="arm_4dof_3kg", help="configuration after (arm_4dof_3kg)")
+    p.add_argument(
+        "--t-change", type=_positive, default=4.0, help="time of the change [s] (default 4)"
+    )
+    p.add_argument(
+        "--switch-delay",
+        type=_non_negative,
+        default=0.0,
+        help="delay between the change and the controller's switch [s] (default 0)",
+    )
+    _common_arguments(p)
+    p.set_defaults(handler=run_tool_change)
+
+
+def _common_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--duration", type=_positive, default=8.0, help="simulated time [s] (default 8)")
+    p.add_argument("--seed", type=_seed, default=0, help="seed of plants and disturbances")
+    p.add_argument(
+        "--initial-offset",
+        type=_float,
+        default=None,
+        metavar="RAD",
+        help="start this far from the reference on every joint [rad] (default: on it)",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
+
+def run_reconfigure(args) -> int:
+    from ..demo import reconfigure_demo
+
+    summary = reconfigure_demo(
+        args.out,
+        configurations=args.assemblies,
+        progress=not args.no_progress,
+        duration=args.duration,
+        seed=args.seed,
+        initial_offset=args.initial_offset,
+    )
+    if args.json:
+        print_json(summary)
+        return EXIT_OK
+    settings = summary["settings"]
+    print(
+        f"epsilon {settings['epsilon']:g} rad, {1 / settings['sample_period']:g} Hz, "
+        f"||d|| <= {settings['disturbance_bound']:g} N m (unknown to the controller), "
+        f"{settings['duration']:g} s per configuration"
+    )
+    header = (
+        f"  {'configuration':<18} {'dof':>3} {'synthesis [ms]':>14} {'met':>5} "
+        f"{'entry [s]':>9} {'final error [rad]':>17} {'wall [s]':>8}"
+    )
+    print(header)
+    for entry in summary["configurations"]:
+        entry_time = "-" if entry.get("entry_time") is None else f"{entry['entry_time']:.3f}"
+        final = "diverged" if entry["diverged"] else f"{entry['final_error']:.3g}"
+        wall = "-" if entry["diverged"] else f"{entry['wall_time']:.1f}"
+        print(
+            f"  {entry['name']:<18} {entry['dof']:>3} {1e3 * entry['synthesis_time']:>14.1f} "
+            f"{'yes' if entry['met'] else 'NO':>5} {entry_time:>9} {final:>17} {wall:>8}"
+        )
+    print(f"figure  {summary['figure']}")
+    return EXIT_OK
+
+
+def run_tool_change(args) -> int:
+    from ..demo import tool_change_demo
+
+    summary = tool_change_demo(
+        args.out,
+        progress=not args.no_progress,
+        before=args.before,
+        after=args.after,
+        t_change=args.t_change,
+        switch_delay=args.switch_delay,
+        duration=args.duration,
+        seed=args.seed,
+        initial_offset=args.initial_offset,
+    )
+    if args.json:
+        print_json(summary)
+        return EXIT_OK
+    reentry = summary["reentry_time"]
+    phi = summary["phi_at_switch"]
+    print(
+        f"{summary['before']['name']} -> {summary['after']['name']} at {summary['t_change']:g} s "
+        f"(controller switched {summary['switch_delay']:g} s later; new controller built in "
+        f"{1e3 * summary['switch_time']:.1f} ms)"
+    )
+    print(
+        f"phi at the switch: {phi['end_of_old_controller']:.6g} -> "
+        f"{phi['start_of_new_controller']:.6g} N m s/rad (state carried over)"
+    )
+    print(
+        "re-entry into the epsilon ball after the change: "
+        + ("never" if reentry is None else f"{1e3 * reentry:.0f} ms")
+        + f"; max error after the change {summary['max_error_after_change']:.3g} rad; "
+        + f"met {'yes' if summary['met'] else 'NO'}"
+    )
+    print(f"figure  {summary['figure']}")
+    return EXIT_OK
+
+
+def _positive(text: str) -> float:
+    value = _float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"'{text}' must be > 0")
+    return value
+
+
+def _non_negative(text: str) -> float:
+    value = _float(text)
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"'{text}' must be >= 0")
+    return value
+
+
+def _float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"'{text}' must be finite")
+    return value
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not an integer >= 0") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"'{text}' must be an integer >= 0")
+    return value

@@ -1,0 +1,215 @@
+"""``urpc simulate``: scenario files and direct mode, overrides, --json, --out, the error contract.
+
+References: the metrics the CLI prints are those of an in-process ``run_scenario`` of the same
+scenario; the true parameters it states are those of ``sample_true_parameters`` and the shipped
+parameter file; a diverging run is a real one (computed torque with a far too stiff gain for its
+sampling period).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from conftest import RR_DIR
+
+from urpc.__main__ import main
+from urpc.metrics import METRIC_NAMES
+from urpc.results import SimulationResult
+from urpc.robot import inertia_problem
+from urpc.scenario import build, load_scenario, run_scenario, sample_true_parameters
+
+SUMMARY_KEYS = {*METRIC_NAMES, "epsilon", "controller", "scenario", "plant", "true_parameters"}
+TIMINGS = ("step_time_median", "wall_time")
+
+
+def _run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _json(capsys, *argv) -> dict:
+    code, out, err = _run(capsys, *argv, "--json")
+    assert code == 0, err
+    assert err == ""  # no progress bar when stderr is not a terminal
+    return json.loads(out)  # exactly one JSON object
+
+
+def test_shipped_scenario_json_matches_an_in_process_run(capsys):
+    summary = _json(capsys, "simulate", "rr_planar/s3_ic2", "--duration", "0.5")
+    assert set(summary) == SUMMARY_KEYS
+    assert summary["controller"] == "interval" and summary["epsilon"] == 0.01
+    assert summary["scenario"] == "s3_ic2" and summary["plant"] == "pinocchio"
+    assert summary["true_parameters"]["values"] == {
+        "link2": {"mass": 10.0, "com_x": 0.525, "iyy": pytest.approx(20 / 12)}
+    }
+    reference = run_scenario(load_scenario("rr_planar/s3_ic2").with_overrides(duration=0.5))
+    for name in METRIC_NAMES:
+        if name not in TIMINGS:
+            assert summary[name] == reference.metrics[name], name
+
+
+def test_flags_override_the_scenario_file(capsys):
+    summary = _json(
+        capsys, "simulate", "rr_planar/s2_ic1", "--controller", "r-alpha", "--epsilon", "0.05",
+        "--sample-period", "1e-3", "--duration", "0.2", "--seed", "3",
+    )  # fmt: skip
+    assert summary["controller"] == "r-alpha" and summary["epsilon"] == 0.05
+    assert summary["phi"] is None and summary["kappa"] is None  # r-alpha has no adaptive gains
+    scenario = load_scenario("rr_planar/s2_ic1").with_overrides(
+        controller="r-alpha", epsilon=0.05, sample_period=1e-3, duration=0.2, seed=3
+    )
+    reference = run_scenario(scenario)
+    assert summary["torque_variation"] == reference.metrics["torque_variation"]
+
+
+def test_out_writes_result_files_and_figures(capsys, tmp_path):
+    out = tmp_path / "deep" / "run"
+    code, text, err = _run(
+        capsys, "simulate", "rr_planar/s3_ic1", "--duration", "0.3", "--out", out
+    )
+    assert code == 0 and err == ""
+    assert "MET" in text and f"saved        {out}" in text
+    assert sorted(p.name for p in out.iterdir()) == [
+        "error.png", "result.csv", "result.npz", "scenario.yaml", "summary.json",
+        "torque.png", "trajectory.png",
+    ]  # fmt: skip
+    for name in ("error.png", "torque.png", "trajectory.png"):
+        assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    loaded = SimulationResult.load(out)
+    assert loaded.duration == pytest.approx(0.3) and loaded.info["plant"] == "pinocchio"
+    saved = json.loads((out / "summary.json").read_text())
+    assert saved == json.loads(json.dumps(loaded.summary()))
+    # the saved scenario reproduces the run
+    rerun = run_scenario(load_scenario(out / "scenario.yaml"))
+    np.testing.assert_array_equal(rerun.q, loaded.q)
+
+
+def test_out_is_all_or_nothing(capsys, tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    def broken(self, path, **kwargs):
+        Path(path).write_bytes(b"half a figure")
+        raise OSError("disk full")
+
+    monkeypatch.setattr(Figure, "savefig", broken)
+    out = tmp_path / "run"
+    code, text, err = _run(
+        capsys, "simulate", "rr_planar/s3_ic1", "--duration", "0.05", "--out", out
+    )
+    assert code == 2 and text == "" and err.count("\n") == 1
+    assert err.startswith("error: ") and "disk full" in err and str(out) in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_direct_mode_states_a_seeded_consistent_true_plant(capsys):
+    summary = _json(capsys, "simulate", "--robot", "rr_planar", "--duration", "0.3")
+    assert set(summary) == SUMMARY_KEYS and summary["scenario"] == "rr_planar"
+    assert summary["epsilon"] == 0.01  # the defaults
+    values = summary["true_parameters"]["values"]["link2"]
+    assert set(values) == {"mass", "com_x", "iyy"}
+    scenario = load_scenario("rr_planar/s3_ic1")  # only for the rr box
+    box = build(scenario).box
+    drawn = sample_true_parameters(box, seed=0)["link2"]
+    link = box.link_box("link2")
+    for name, value in values.items():
+        k = link.fields.index(name)
+        assert value == drawn[k] and link.lower[k] <= value <= link.upper[k]
+    assert inertia_problem(np.asarray(link.inertia(drawn).inertia)) is None
+    assert "mass = " in summary["true_parameters"]["description"]
+    other = _json(capsys, "simulate", "--robot", "rr_planar", "--duration", "0.1", "--seed", "4")
+    assert other["true_parameters"]["values"] != summary["true_parameters"]["values"]
+
+
+def test_direct_mode_with_files_and_continuous_time(capsys, tmp_path):
+    summary = _json(
+        capsys, "simulate", "--robot", RR_DIR / "rr_planar.urdf", "--uncertainty",
+        RR_DIR / "uncertainty.yaml", "--true-params", RR_DIR / "true_parameters.yaml",
+        "--continuous", "--epsilon", "1e-3", "--duration", "0.2",
+    )  # fmt: skip
+    assert summary["scenario"] == "rr_planar" and summary["epsilon"] == 1e-3
+    assert summary["true_parameters"]["values"]["link2"]["mass"] == 10.0
+
+
+def test_direct_mode_on_a_six_joint_arm(capsys):
+    text = _run(capsys, "simulate", "--robot", "ur5", "--duration", "0.2")[1]
+    assert "ur5 (6 joints)" in text and "payload: mass = " in text
+    summary = _json(capsys, "simulate", "--robot", "ur5", "--duration", "0.2", "--method", "hull")
+    assert summary["final_error"] < summary["epsilon"]  # starts on the reference, stays close
+
+
+def _diverging_scenario(tmp_path: Path) -> Path:
+    """Computed torque with omega_n = 1e4 rad/s at 1 kHz: the sampled loop is unstable."""
+    document = {
+        "robot": "rr_planar",
+        "uncertainty": str(RR_DIR / "uncertainty.yaml"),
+        "true_parameters": "nominal",
+        "controller": "computed-torque",
+        "controller_options": {"computed-torque": {"natural_frequency": 1e4}},
+        "initial_condition": {"offset": [1e-3, 0]},
+        "duration": 1.0,
+    }
+    path = tmp_path / "stiff.yaml"
+    path.write_text(yaml.safe_dump(document))
+    return path
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["simulate", "no/such/scenario.yaml"], "no such scenario file"),
+        (["simulate", "rr_planar/s2_ic1", "--epsilon", "-1"], "field 'epsilon'"),
+        (["simulate", "rr_planar/s2_ic1", "--epsilon", "tiny"], "not a finite number"),
+        (["simulate", "rr_planar/s2_ic1", "--controller", "pid"], "valid: computed-torque"),
+        (["simulate", "rr_planar/s2_ic1", "--plant", "bullet"], "valid: mujoco, pinocchio"),
+        (["simulate", "rr_planar/s1_ic1", "--plant", "mujoco"], "continuous time"),
+        (["simulate", "rr_planar/s2_ic1", "--method", "exact"], "unknown bound method"),
+        (["simulate", "rr_planar/s2_ic1", "--duration", "0"], "must be > 0"),
+        (["simulate", "rr_planar/s2_ic1", "--seed", "x"], "invalid int value"),
+        (["simulate", "rr_planar/s2_ic1", "--continuous", "--sample-period", "1e-3"], "not allowed"),
+        (["simulate"], "give a scenario file"),
+        (["simulate", "--robot", "rr_planer"], "did you mean 'rr_planar'"),
+        (["simulate", "--robot", "ur10"], "no shipped uncertainty box"),
+        (["simulate", "--robot", "rr_planar", "--torque-limit", "10,-1"], "> 0"),
+        (["reproduce-paper", "--duration", "-1"], "must be a finite number > 0"),
+        (["reproduce-paper", "--workers", "0"], "integer >= 1"),
+    ],
+)  # fmt: skip
+def test_bad_input_exits_2_with_one_line(capsys, argv, message):
+    code, out, err = _run(capsys, *argv)
+    assert code == 2 and out == ""
+    assert err.startswith("error: ") and err.count("\n") == 1
+    assert message in err
+
+
+def test_a_diverging_run_exits_2_naming_time_and_state(capsys, tmp_path):
+    out = tmp_path / "run"
+    code, text, err = _run(capsys, "simulate", _diverging_scenario(tmp_path), "--out", out)
+    assert code == 2 and text == "" and err.count("\n") == 1
+    assert err.startswith("error: the simulation diverged at t = ")
+    assert "q = " in err and "qd = " in err
+    assert not out.exists()
+
+
+def test_mujoco_plant_gives_nearly_the_same_run(capsys):
+    pytest.importorskip("mujoco")
+    argv = ("simulate", "rr_planar/s3_ic2", "--duration", "0.3")
+    pinocchio = _json(capsys, *argv)
+    mujoco = _json(capsys, *argv, "--plant", "mujoco")
+    assert mujoco["plant"] == "mujoco" and pinocchio["plant"] == "pinocchio"
+    assert mujoco["entry_time"] == pinocchio["entry_time"]
+    for name in ("final_error", "max_error_after_entry", "torque_rms", "torque_peak", "phi"):
+        assert mujoco[name] == pytest.approx(pinocchio[name], rel=1e-6), name
+    # the chattering index differences every sample: rounding shows most there
+    assert mujoco["torque_variation"] == pytest.approx(pinocchio["torque_variation"], rel=1e-4)
+
+
+def test_help_lists_the_simulation_commands(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["--help"])
+    out = capsys.readouterr().out
+    assert info.value.code == 0 and "simulate" in out and "reproduce-paper" in out
