@@ -173,9 +173,12 @@ def test_api_raises_typed_error(name, tmp_path):
         assert word in str(info.value)
 
 
-def test_bound_rejects_wrong_shapes_in_the_api():
+@pytest.mark.parametrize("method", sorted(urpc.BOUND_METHODS))
+def test_bound_rejects_wrong_shapes_in_the_api(method):
     robot = urpc.load_robot("rr_planar")
     box = urpc.load_uncertainty(RR_DIR / "uncertainty.yaml", robot)
-    bound = urpc.make_bound("hull", robot, box)
-    with pytest.raises((InputError, ValueError)):
+    bound = urpc.make_bound(method, robot, box)
+    with pytest.raises(InputError, match="q has shape"):
         bound.enclose(np.zeros(3), np.zeros(2), np.zeros(2), np.zeros(2))
+    with pytest.raises(InputError, match="qdd_a has shape"):
+        bound.rho(np.zeros(2), np.zeros(2), np.zeros(2), np.zeros((2, 2)))

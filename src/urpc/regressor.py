@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from .errors import InputError
 from .robot import Robot
 
 
@@ -80,15 +81,32 @@ class SlotineLiRegressor:
 
         The fast path of the bound methods, which fold ``1 / SCALE`` into their own matrices.
         """
-        config = q if self._configuration is None else self._configuration(q)
-        with_gravity = pin.computeJointTorqueRegressor(
-            self._model_gravity, self._data_gravity, config, qd + qd_a, self.SCALE * qdd_a
-        )
-        free = pin.computeJointTorqueRegressor(
-            self._model_free, self._data_free, config, qd - qd_a, self._zero
-        )
+        try:
+            config = q if self._configuration is None else self._configuration(q)
+            with_gravity = pin.computeJointTorqueRegressor(
+                self._model_gravity, self._data_gravity, config, qd + qd_a, self.SCALE * qdd_a
+            )
+            free = pin.computeJointTorqueRegressor(
+                self._model_free, self._data_free, config, qd - qd_a, self._zero
+            )
+        except (ValueError, TypeError, IndexError) as exc:
+            # Only on failure (free on the fast path): say which vector has the wrong shape.
+            raise _shape_error(self.robot, q=q, qd=qd, qd_a=qd_a, qdd_a=qdd_a) or exc from None
         # Pinocchio hands back a fresh copy, which can take the difference in place.
         return np.subtract(with_gravity, free, out=with_gravity if out is None else out)
+
+
+def _shape_error(robot: Robot, **vectors) -> InputError | None:
+    """An error naming the first state vector that is not ``dof`` finite numbers, if any."""
+    for name, value in vectors.items():
+        array = np.asarray(value)
+        if array.shape != (robot.dof,):
+            return InputError(
+                f"{name} has shape {array.shape}, but {robot.name} has {robot.dof} joints "
+                f"({', '.join(robot.joint_names)})",
+                field=name,
+            )
+    return None
 
 
 def placement_matrix(placement: pin.SE3) -> np.ndarray:
@@ -98,7 +116,9 @@ def placement_matrix(placement: pin.SE3) -> np.ndarray:
     placement gives exactly the identity matrix."""
     base = np.zeros(10)
     base[0] = 1.0
-    acted_base = np.asarray(placement.act(pin.Inertia.FromDynamicParameters(base)).toDynamicParameters())
+    acted_base = np.asarray(
+        placement.act(pin.Inertia.FromDynamicParameters(base)).toDynamicParameters()
+    )
     A = np.empty((10, 10))
     for k in range(10):
         pi = base.copy()

@@ -33,7 +33,10 @@ def barycentric_enclosure(box: LinkBox) -> tuple[np.ndarray, np.ndarray]:
     lo, hi = box.lower, box.upper
     m = (lo[0:1], hi[0:1])
     c = [(lo[k : k + 1], hi[k : k + 1]) for k in (1, 2, 3)]
-    ic = {name: (lo[k : k + 1], hi[k : k + 1]) for k, name in zip(range(4, 10), ("xx", "xy", "yy", "xz", "yz", "zz"))}
+    ic = {
+        name: (lo[k : k + 1], hi[k : k + 1])
+        for k, name in zip(range(4, 10), ("xx", "xy", "yy", "xz", "yz", "zz"), strict=True)
+    }
     h = [ia.mul(m, ck) for ck in c]
     sq = [ia.square(ck) for ck in c]
     io = {
@@ -57,11 +60,11 @@ class HullBound(BoundMethod):
 
     def __init__(self, robot, box):
         super().__init__(robot, box)
-        n_columns = 10 * self.robot.dof
+        n_columns = 10 * (self.robot.model.njoints - 1)
         # Weights act on Y4 = SCALE * Y_SL (SlotineLiRegressor.scaled), hence the factor.
         scale = 1.0 / SlotineLiRegressor.SCALE
         center_weight = np.zeros(n_columns)  # center = Y4 @ center_weight
-        radius_weight = np.zeros(n_columns)  # body-frame links' radius and all rounding margins
+        radius_weight = np.zeros(n_columns)  # body-frame links' radii and all rounding margins
         placed = []  # links off their body frame: radius += sum |Y4 @ (A diag(pi_r))|
         for link_box in box.uncertain_links:
             lower, upper = barycentric_enclosure(link_box)
@@ -77,40 +80,40 @@ class HullBound(BoundMethod):
             if np.array_equal(A, np.eye(10)):
                 radius_weight[columns] += scale * radius
             else:
-                placed_matrix = np.zeros((n_columns, 10))
-                placed_matrix[columns] = scale * A * radius
-                placed.append(placed_matrix)
-        self._center_weight = center_weight
+                placed_columns = np.zeros((n_columns, 10))
+                placed_columns[columns] = scale * A * radius
+                placed.append(placed_columns[:, radius > 0])
+        # Y4 @ linear = center, or [center, the placed links' radius terms] (one product).
+        self._linear = np.column_stack([center_weight, *placed]) if placed else center_weight
+        self._ones = np.ones(self._linear.shape[1]) if placed else None
         self._radius_weight = radius_weight
-        # One product gives the placed links' parameter directions (a handful of columns).
-        self._placed_matrix = np.hstack(placed) if placed else None
         self._constant = ROUNDING_ABSOLUTE + (self.disturbance_bound or 0.0)
         self._scaled_regressor = self.regressor.scaled
 
     def _center_radius(self, Y4: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Center and radius (without the absolute margin) from ``Y4 = SCALE * Y_SL``.
-
-        ``ndarray.dot`` rather than ``@``: the same BLAS call with half the Python overhead."""
-        center = Y4.dot(self._center_weight)
+        """Center and radius (with the absolute margin) from ``Y4 = SCALE * Y_SL``."""
+        linear = Y4.dot(self._linear)
         radius = np.abs(Y4).dot(self._radius_weight)
-        if self._placed_matrix is not None:
-            radius += np.abs(Y4.dot(self._placed_matrix)).sum(axis=1)
-        return center, radius
+        radius += ROUNDING_ABSOLUTE
+        if self._ones is None:
+            return linear, radius
+        radius += np.abs(linear[:, 1:]).sum(axis=1)
+        return linear[:, 0], radius
 
     def enclose(self, q, qd, qd_a, qdd_a):
         center, radius = self._center_radius(self._scaled_regressor(q, qd, qd_a, qdd_a))
-        radius += ROUNDING_ABSOLUTE
         return self._add_disturbance(center - radius, center + radius)
 
     def enclose_regressor(self, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         center, radius = self._center_radius(SlotineLiRegressor.SCALE * Y)
-        radius += ROUNDING_ABSOLUTE
         return self._add_disturbance(center - radius, center + radius)
 
     def rho(self, q, qd, qd_a, qdd_a):
-        center, radius = self._center_radius(self._scaled_regressor(q, qd, qd_a, qdd_a))
-        # max(|center - radius|, |center + radius|) = |center| + radius.
-        rho = np.abs(center, out=center)
-        rho += radius
+        """``|center| + radius`` (= ``max(|lower|, |upper|)``) [N m]. ``ndarray.dot`` rather than
+        ``@``: the same BLAS call with half the Python overhead."""
+        Y4 = self._scaled_regressor(q, qd, qd_a, qdd_a)
+        rho = np.abs(Y4).dot(self._radius_weight)
+        linear = np.abs(Y4.dot(self._linear))  # |center| (and the placed radius terms)
+        rho += linear if self._ones is None else linear.dot(self._ones)
         rho += self._constant
         return rho
