@@ -110,6 +110,7 @@ class Robot:
             if _SUPPORTED[model.joints[j].shortname()] == "continuous"
         ]
         self._simple = not self._continuous
+        self._lower_indices = np.tril_indices(model.nv, -1)
 
     # ----------------------------------------------------------------------------- description
     @property
@@ -213,8 +214,12 @@ class Robot:
 
     def M(self, q: np.ndarray) -> np.ndarray:
         """Joint-space inertia matrix ``M(q)`` [kg m^2], symmetric, ``dof x dof``."""
+        # Pinocchio fills the upper triangle of a fresh array; mirror it (cached indices: this is
+        # on the control step's hot path with the sampled-data gain limit).
         M = pin.crba(self.model, self.data, self.configuration(q))
-        return np.triu(M) + np.triu(M, 1).T
+        lower = self._lower_indices
+        M[lower] = M.T[lower]
+        return M
 
     def C(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """Christoffel-consistent Coriolis matrix ``C(q, qd)`` [kg m^2/s] (``Mdot - 2C`` skew)."""
