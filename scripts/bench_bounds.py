@@ -6,20 +6,24 @@
 
 Figures are medians over timed batches of the CPU time of the calling thread
 (:func:`urpc.benchmark.bench_bounds`), with one nominal ``pinocchio.rnea`` call timed in the same
-run for scale.
+run for scale. ``urpc bench bounds`` prints the same table (default methods: hull, vertex,
+rigorous); ``urpc bench`` and ``scripts/bench.py`` run the whole performance suite.
 """
 
 from __future__ import annotations
 
 import argparse
-import platform
 import re
 from pathlib import Path
 
-import numpy as np
-import pinocchio as pin
-
-from urpc.benchmark import BENCHMARK_ROBOTS, VARIANTS, bench_bounds, format_timings
+from urpc.benchmark import (
+    BENCHMARK_ROBOTS,
+    VARIANTS,
+    bench_bounds,
+    format_machine,
+    format_timings,
+    machine_info,
+)
 from urpc.bounds import METHODS
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "bounds.md"
@@ -41,10 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--write-docs", action="store_true", help=f"update {DOCS}")
     args = parser.parse_args(argv)
     result = bench_bounds(args.robots, args.methods, args.repeats)
-    machine = (
-        f"{platform.processor() or platform.machine()}, Python {platform.python_version()}, "
-        f"numpy {np.__version__}, Pinocchio {pin.__version__}"
-    )
+    machine = format_machine(machine_info())
     text = format_timings(result)
     scaling = ", ".join(
         f"{s['dof']} joints x {s['links']} links: {1e6 * s['vertex']:.1f} us"

@@ -16,8 +16,9 @@ A campaign checks the guarantee at scale. Run ``i`` of ``runs`` draws, from its 
   paper's IC1 ``q = 0`` and IC2 ``q = 2 epsilon (1, -1)``), and the scenario's ``qd0``.
 
 The seeds derive from ``(seed, run index)`` alone through :class:`numpy.random.SeedSequence`
-``.spawn``, so a run's draws and result do not depend on the number of workers, on the
-scheduling order, or on local versus Dask execution. Runs execute in parallel in a local
+``.spawn`` (which runs are vertices, and which vertices, follows from the run count and the
+seed), so a run's draws and result do not depend on the number of workers, on the scheduling
+order, or on local versus Dask execution. Runs execute in parallel in a local
 process pool (``workers``) or on an existing Dask cluster (``scheduler``); each worker builds the
 robot, the box and the controller once per scenario and only swaps the true plant per run.
 
@@ -170,7 +171,7 @@ def draw_runs(
                 if vertex_runs == total:
                     break  # every vertex has its slot: an inconsistent one becomes uniform
         if point is None:
-            point, rejected = _consistent_draw(box, rng, setup)
+            point, rejected = _consistent_draw(box, rng)
         offset = rng.uniform(-ic_spread * epsilon, ic_spread * epsilon, size=setup.q0.shape)
         specs.append(
             RunSpec(
@@ -205,7 +206,7 @@ def _random_vertices(n_uncertain: int, rng: np.random.Generator):
 
 
 def _consistent_draw(
-    box: ParameterBox, rng: np.random.Generator, setup: ScenarioSetup
+    box: ParameterBox, rng: np.random.Generator
 ) -> tuple[dict[str, np.ndarray], int]:
     for rejected in range(MAX_DRAWS):
         point = box.sample(rng)
@@ -360,8 +361,8 @@ class CampaignResult:
     def summary(self) -> dict[str, Any]:
         """The content of ``summary.json``.
 
-        Keys: the scenario's settings (``scenario``, ``scenario_file``, ``controller``,
-        ``epsilon`` [rad], ``duration`` [s], ``sample_period`` [s], ``disturbance`` [N m]);
+        Keys: the scenario's settings (``scenario``, ``scenario_file``, ``controller`` and its
+        ``controller_options``, ``epsilon`` [rad], ``duration`` [s], ``sample_period`` [s], ``disturbance`` [N m]);
         ``seed``, ``runs``, ``met``, ``met_fraction``; ``worst_final_error_over_epsilon`` (and
         its ``worst_final_error_run``), ``worst_entry_time`` [s], ``never_entered``,
         ``diverged`` and ``torque_peak_max`` [N m], over the runs that did not diverge (``None``
@@ -381,6 +382,7 @@ class CampaignResult:
             "scenario": scenario.name,
             "scenario_file": None if scenario.source is None else str(scenario.source),
             "controller": scenario.controller,
+            "controller_options": scenario.to_dict()["controller_options"][scenario.controller],
             "epsilon": scenario.epsilon,
             "duration": scenario.duration,
             "sample_period": scenario.sample_period,

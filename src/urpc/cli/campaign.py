@@ -67,6 +67,12 @@ def register(commands) -> None:
     p.add_argument("--duration", type=float, help="override the scenario's duration [s]")
     p.add_argument("--plant", choices=PLANT_BACKENDS, help="override the scenario's plant backend")
     p.add_argument(
+        "--sampled-gain-limit",
+        choices=("on", "off"),
+        help="interval controller: cap each inertia mode's gain at lambda_i/T (on) or run the "
+        "paper's law unchanged (off); default: the scenario's setting",
+    )
+    p.add_argument(
         "--ic-spread",
         type=_non_negative,
         default=2.0,
@@ -86,7 +92,11 @@ def run_campaign_command(args) -> int:
     from ..campaign import check_writable, run_campaign
     from ..scenario import load_scenario
 
-    scenario = load_scenario(args.scenario).with_overrides(duration=args.duration, plant=args.plant)
+    limit = args.sampled_gain_limit
+    options = None if limit is None else {"interval": {"sampled_gain_limit": limit == "on"}}
+    scenario = load_scenario(args.scenario).with_overrides(
+        duration=args.duration, plant=args.plant, controller_options=options
+    )
     out = check_writable(args.out or Path(f"campaign_{scenario.name}"))
     result = run_campaign(
         scenario,

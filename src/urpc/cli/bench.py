@@ -1,0 +1,128 @@
+"""Benchmark commands: ``urpc bench`` (the performance suite) and ``urpc bench bounds``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..errors import InputError
+from .common import EXIT_OK, Parser, names, print_json
+
+
+def register(commands) -> None:
+    p = commands.add_parser(
+        "bench",
+        help="measure the performance suite: rho, control step, simulation, synthesis, campaign",
+        description="Measure the figures of docs/performance.md on this machine: one rho "
+        "evaluation per bound method and robot and its ratio to one nominal pin.rnea call, one "
+        "control step, the simulation speed of the paper's scenarios 2 and 3, the synthesis "
+        "time, and the throughput of a small campaign on 2 workers. The full suite takes under a "
+        "minute on 2 cores, --quick a few seconds. 'urpc bench bounds' times rho alone.",
+        epilog="Timings of single calls are medians of interleaved batches of thread CPU time, "
+        "next to one pin.rnea call timed in the same batches: on a shared machine the ratios "
+        "are the stable figures.",
+    )
+    p.add_argument("--quick", action="store_true", help="fewer repeats, shorter simulations")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+    p.set_defaults(handler=run_bench)
+    parts = p.add_subparsers(dest="bench_part", metavar="[bounds]", parser_class=Parser)
+
+    b = parts.add_parser(
+        "bounds",
+        help="time one rho evaluation per bound method and robot, with its ratio to pin.rnea",
+        description="Time one evaluation of rho (the Slotine-Li regressor included) per bound "
+        "method on the benchmark box of each robot (the RR arm's Table I box; +-10 % mass, "
+        "+-1 cm CoM and +-10 % inertia on every link of the UR5 and the Panda), next to one "
+        "nominal pin.rnea call timed in the same batches.",
+    )
+    # SUPPRESS: `urpc bench --json bounds` and `urpc bench bounds --json` both work.
+    b.add_argument(
+        "--json", action="store_true", default=argparse.SUPPRESS, help="print one JSON object"
+    )
+    b.add_argument("--quick", action="store_true", default=argparse.SUPPRESS, help="fewer repeats")
+    b.add_argument(
+        "--robots",
+        type=names,
+        metavar="NAMES",
+        help="comma-separated robots (default: rr_planar,ur5,panda)",
+    )
+    b.add_argument(
+        "--methods",
+        type=names,
+        metavar="NAMES",
+        help="comma-separated bound methods (default: hull,vertex,rigorous)",
+    )
+    b.add_argument(
+        "--repeats", type=_positive_int, metavar="N", help="timed batches per figure (default 51)"
+    )
+    b.set_defaults(handler=run_bench_bounds)
+
+
+def run_bench(args) -> int:
+    from ..benchmark import (
+        SuiteSettings,
+        format_benchmarks,
+        format_machine,
+        run_benchmarks,
+    )
+
+    settings = SuiteSettings.quick() if args.quick else SuiteSettings()
+    result = run_benchmarks(settings=settings, progress=_progress(args))
+    if args.json:
+        print_json(result)
+        return EXIT_OK
+    print(f"urpc bench{' --quick' if args.quick else ''}: {format_machine(result['machine'])}\n")
+    print(format_benchmarks(result, settings))
+    return EXIT_OK
+
+
+def run_bench_bounds(args) -> int:
+    from ..benchmark import (
+        BENCHMARK_ROBOTS,
+        SUITE_METHODS,
+        bench_bounds,
+        format_machine,
+        format_timings,
+        machine_info,
+    )
+
+    robots = args.robots or list(BENCHMARK_ROBOTS)
+    unknown = [name for name in robots if name not in BENCHMARK_ROBOTS]
+    if unknown:
+        raise InputError(
+            f"unknown benchmark robot {', '.join(unknown)}; valid: {', '.join(BENCHMARK_ROBOTS)}",
+            field="robots",
+        )
+    methods = args.methods or list(SUITE_METHODS)
+    repeats = args.repeats or (11 if getattr(args, "quick", False) else 51)
+    machine = machine_info()
+    result = bench_bounds(robots, methods, repeats)
+    if getattr(args, "json", False):
+        print_json({"machine": machine, **result})
+        return EXIT_OK
+    print(f"{format_machine(machine)}\n")
+    print(format_timings(result))
+    if result["scaling"]:
+        scaling = ", ".join(
+            f"{s['dof']} joints x {s['links']} links: {1e6 * s['vertex']:.1f} us"
+            for s in result["scaling"].values()
+        )
+        print(f"\nvertex scaling: {scaling}")
+    return EXIT_OK
+
+
+def _progress(args):
+    if args.no_progress or not sys.stderr.isatty():
+        return None
+    return lambda message: print(f"bench: {message} ...", file=sys.stderr, flush=True)
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not an integer") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"'{text}' must be an integer >= 1")
+    return value

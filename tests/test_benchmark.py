@@ -1,0 +1,108 @@
+"""The performance suite (``urpc.benchmark.run_benchmarks``, ``urpc bench``): structure only.
+
+Speed targets are not asserted (the machine is shared); the tests check that every figure is
+there, positive and finite, on a tiny configuration that runs in a few seconds.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from urpc.__main__ import main
+from urpc.benchmark import (
+    SUITE_KEYS,
+    SuiteSettings,
+    format_benchmarks,
+    format_profile,
+    profile_control_step,
+    run_benchmarks,
+)
+
+#: Quick mode restricted to the RR arm, one method, 0.1 s simulations and a 2-run campaign.
+TINY = SuiteSettings.quick(
+    robots=("rr_planar",),
+    methods=("hull",),
+    repeats=3,
+    sim_duration=0.1,
+    synthesis_repeats=1,
+    assemblies=("arm_3dof",),
+    campaign_runs=2,
+    campaign_duration=0.1,
+)
+
+
+def _positive_finite(value) -> bool:
+    return isinstance(value, float | int) and math.isfinite(value) and value > 0
+
+
+def _check_suite(result: dict) -> None:
+    assert set(result) == set(SUITE_KEYS)
+    assert set(result["rho"]) == set(result["rho_over_rnea"]) == {"rr_planar"}
+    for figure in ("rho", "rho_over_rnea"):
+        assert set(result[figure]["rr_planar"]) == {"hull"}
+        assert _positive_finite(result[figure]["rr_planar"]["hull"])
+    for figure in ("rnea", "control_step"):
+        assert set(result[figure]) == {"rr_planar"}
+        assert _positive_finite(result[figure]["rr_planar"])
+    assert set(result["sim_speed"]) == {"rr_planar/s2_ic1", "rr_planar/s3_ic1"}
+    assert set(result["synthesis"]) == {"rr_planar", "assembly/arm_3dof"}
+    for figure in ("sim_speed", "synthesis"):
+        assert all(_positive_finite(v) for v in result[figure].values())
+    assert _positive_finite(result["campaign_runs_per_minute"])
+    machine = result["machine"]
+    assert machine["cpu_count"] >= 1 and machine["python"] and machine["pinocchio"]
+
+
+def test_quick_suite_has_every_figure_positive_and_finite():
+    result = run_benchmarks(quick=True, settings=TINY)
+    _check_suite(result)
+    table = format_benchmarks(result, TINY)
+    assert table.count("\n") == 1 + 8  # header, rule, one row per figure and case
+    assert "rr_planar / hull" in table and "<= 10 us" in table
+
+
+def test_cli_bench_json_prints_one_object(capsys, monkeypatch):
+    monkeypatch.setattr(SuiteSettings, "quick", classmethod(lambda cls, **changes: TINY))
+    assert main(["bench", "--quick", "--json", "--no-progress"]) == 0
+    out, err = capsys.readouterr()
+    _check_suite(json.loads(out))
+    assert err == ""
+
+
+@pytest.mark.parametrize("argv", [["bench", "bounds", "--json"], ["bench", "--json", "bounds"]])
+def test_cli_bench_bounds_json(capsys, argv):
+    code = main([*argv, "--robots", "rr_planar", "--repeats", "3"])
+    out, _ = capsys.readouterr()
+    result = json.loads(out)
+    assert code == 0 and {"rho", "rho_over_rnea", "rnea", "machine"} <= set(result)
+    for figure in ("rho", "rho_over_rnea"):
+        assert set(result[figure]["rr_planar"]) == {"hull", "vertex", "rigorous"}
+        assert all(_positive_finite(v) for v in result[figure]["rr_planar"].values())
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["bench", "bounds", "--robots", "atlas"],
+        ["bench", "bounds", "--methods", "exact", "--robots", "rr_planar"],
+        ["bench", "bounds", "--repeats", "0"],
+        ["bench", "--repeats", "3"],
+    ],
+)
+def test_cli_bench_bad_input_exits_2_with_one_line(capsys, argv):
+    code = main(argv)
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.startswith("error:") and err.count("\n") == 1
+
+
+def test_profile_control_step_parts():
+    profile = profile_control_step(["rr_planar"], repeats=3)
+    times = profile["rr_planar"]
+    for part in ("output", "regressor", "bound", "nominal", "arithmetic", "rnea"):
+        assert _positive_finite(times[part])
+    assert "gain_limit" not in times  # the RR arm's scenario runs the paper's law
+    assert "rr_planar" in format_profile(profile)
