@@ -335,6 +335,40 @@ def test_vertex_is_exact_when_only_masses_are_uncertain(ur5):
         assert np.all(np.abs(ratios - 1.0) < 1e-6), ratios
 
 
+#: A wide CoM box on one UR5 wrist link (exact inertia about the CoM): ``G`` is a quadratic in the
+#: CoM whose extrema often lie inside the box, where no vertex sees them.
+WIDE_COM = {"links": {"wrist_2_link": {"mass": [1.0, 2.0], **{f"com_{a}": "+-0.3" for a in "xyz"}}}}
+
+
+@pytest.mark.parametrize("slope_margin", [True, False])
+def test_vertex_margin_covers_interior_extrema(ur5, slope_margin):
+    """Through the whole method (regressor, compiled kernel): on a dense CoM grid at both mass
+    ends, every ``w`` lies in the enclosure, and at some states the grid's extreme beats every
+    vertex, so the curvature margin (not the vertices) is what keeps the bound sound."""
+    box = parse_uncertainty(WIDE_COM, ur5)
+    (link,) = box.links
+    grid = np.linspace(-0.3, 0.3, 7)
+    points, corner = [], []
+    for mass, *offset in itertools.product([1.0, 2.0], grid, grid, grid):
+        values = link.nominal.copy()
+        values[0], values[1:4] = mass, link.nominal[1:4] + np.array(offset)
+        points.append({link.link: values})
+        corner.append(all(abs(abs(o) - 0.3) < 1e-12 for o in offset))
+    rng = np.random.default_rng(21)
+    states = [random_state(rng, ur5.dof) for _ in range(8)]
+    sampled = sampled_mismatch(ur5, box, points, states)
+    bound = VertexBound(ur5, box, slope_margin=slope_margin)
+    corner = np.array(corner)
+    interior_wins = 0
+    for state, w, magnitude in zip(states, sampled.w, sampled.magnitude, strict=True):
+        lower, upper = bound.enclose(*state)
+        assert_encloses(lower, upper, w, magnitude)
+        span = w.max(axis=0) - w.min(axis=0) + 1e-300
+        interior_wins += np.sum(w.max(axis=0) > w[corner].max(axis=0) + 1e-3 * span)
+        interior_wins += np.sum(w.min(axis=0) < w[corner].min(axis=0) - 1e-3 * span)
+    assert interior_wins > 0  # without the margin, the vertices alone would not be sound here
+
+
 # ============================================================================== the margin lemma
 def _G(y: np.ndarray, com: np.ndarray) -> float:
     return float(y @ unit_mass_parameters(com))
