@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from ..errors import InputError
-from .common import EXIT_OK, Parser, names, print_json
+from .common import EXIT_OK, Parser, names, positive_int, print_json
 
 
 def register(commands) -> None:
@@ -54,7 +54,7 @@ def register(commands) -> None:
         help="comma-separated bound methods (default: hull,vertex,rigorous)",
     )
     b.add_argument(
-        "--repeats", type=_positive_int, metavar="N", help="timed batches per figure (default 51)"
+        "--repeats", type=positive_int, metavar="N", help="timed batches per figure (default 51)"
     )
     b.set_defaults(handler=run_bench_bounds)
 
@@ -116,13 +116,3 @@ def _progress(args):
     if args.no_progress or not sys.stderr.isatty():
         return None
     return lambda message: print(f"bench: {message} ...", file=sys.stderr, flush=True)
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not an integer") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"'{text}' must be an integer >= 1")
-    return value

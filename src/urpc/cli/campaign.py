@@ -2,40 +2,9 @@
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
-from .common import EXIT_OK, print_json
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not an integer") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{value} must be >= 1")
-    return value
-
-
-def _non_negative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not an integer") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{value} must be >= 0")
-    return value
-
-
-def _non_negative(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
-    if not value >= 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"{text} must be a finite number >= 0")
-    return value
+from .common import EXIT_OK, non_negative_float, non_negative_int, positive_int, print_json
 
 
 def register(commands) -> None:
@@ -53,16 +22,16 @@ def register(commands) -> None:
         "number of workers.",
     )
     p.add_argument("scenario", help="scenario file, or a shipped name such as rr_planar/s3_ic1")
-    p.add_argument("--runs", type=_positive_int, required=True, help="number of runs")
+    p.add_argument("--runs", type=positive_int, required=True, help="number of runs")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=_positive_int, help="local worker processes (default: 2)")
+    where.add_argument("--workers", type=positive_int, help="local worker processes (default: 2)")
     where.add_argument(
         "--scheduler",
         metavar="ADDRESS",
         help="address of a running Dask scheduler (tcp://host:8786) whose workers have urpc "
         "installed; replaces the local processes",
     )
-    p.add_argument("--seed", type=_non_negative_int, default=0, help="campaign seed (default: 0)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="campaign seed (default: 0)")
     p.add_argument("--out", type=Path, help="output folder (default: campaign_<scenario name>)")
     p.add_argument("--duration", type=float, help="override the scenario's duration [s]")
     p.add_argument("--plant", choices=PLANT_BACKENDS, help="override the scenario's plant backend")
@@ -74,13 +43,13 @@ def register(commands) -> None:
     )
     p.add_argument(
         "--ic-spread",
-        type=_non_negative,
+        type=non_negative_float,
         default=2.0,
         help="half-width of the random initial offset, in epsilon (default: 2)",
     )
     p.add_argument(
         "--vertex-runs",
-        type=_non_negative_int,
+        type=non_negative_int,
         help="number of vertex runs (default: every vertex if they fit, else RUNS/2)",
     )
     p.add_argument("--json", action="store_true", help="print the summary as one JSON object")

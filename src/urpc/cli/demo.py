@@ -3,10 +3,18 @@
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
-from .common import EXIT_OK, Parser, names, print_json
+from .common import (
+    EXIT_OK,
+    Parser,
+    finite_float,
+    names,
+    non_negative_float,
+    non_negative_int,
+    positive_float,
+    print_json,
+)
 
 
 def register(commands) -> None:
@@ -62,11 +70,11 @@ def register(commands) -> None:
     p.add_argument("--before", default="arm_4dof", help="configuration before (default arm_4dof)")
     p.add_argument("--after", default="arm_4dof_3kg", help="configuration after (arm_4dof_3kg)")
     p.add_argument(
-        "--t-change", type=_positive, default=4.0, help="time of the change [s] (default 4)"
+        "--t-change", type=positive_float, default=4.0, help="time of the change [s] (default 4)"
     )
     p.add_argument(
         "--switch-delay",
-        type=_non_negative,
+        type=non_negative_float,
         default=0.0,
         help="delay between the change and the controller's switch [s] (default 0)",
     )
@@ -75,11 +83,15 @@ def register(commands) -> None:
 
 
 def _common_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--duration", type=_positive, default=8.0, help="simulated time [s] (default 8)")
-    p.add_argument("--seed", type=_seed, default=0, help="seed of plants and disturbances")
+    p.add_argument(
+        "--duration", type=positive_float, default=8.0, help="simulated time [s] (default 8)"
+    )
+    p.add_argument(
+        "--seed", type=non_negative_int, default=0, help="seed of plants and disturbances"
+    )
     p.add_argument(
         "--initial-offset",
-        type=_float,
+        type=finite_float,
         default=None,
         metavar="RAD",
         help="start this far from the reference on every joint [rad] (default: on it)",
@@ -161,37 +173,3 @@ def run_tool_change(args) -> int:
     )
     print(f"figure  {summary['figure']}")
     return EXIT_OK
-
-
-def _positive(text: str) -> float:
-    value = _float(text)
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"'{text}' must be > 0")
-    return value
-
-
-def _non_negative(text: str) -> float:
-    value = _float(text)
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"'{text}' must be >= 0")
-    return value
-
-
-def _float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"'{text}' must be finite")
-    return value
-
-
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not an integer >= 0") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"'{text}' must be an integer >= 0")
-    return value

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import argparse
-import math
 import sys
 from pathlib import Path
 
 from ..errors import InputError
-from .common import EXIT_OK, names, print_json
+from .common import EXIT_OK, names, positive_float, print_json
 
 
 def register(commands) -> None:
@@ -89,7 +87,7 @@ def register(commands) -> None:
     )
     p.add_argument(
         "--duration",
-        type=_positive_float,
+        type=positive_float,
         metavar="S",
         help="simulated time of each run [s] (default: the scenario files' 10 s)",
     )
@@ -274,13 +272,3 @@ def run_reproduce_paper(args) -> int:
     print(results_markdown(document))
     print(f"Wrote {len(document['files'])} files into {out} ({document['wall_time']:.1f} s).")
     return EXIT_OK
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"'{text}' must be a finite number > 0")
-    return value
