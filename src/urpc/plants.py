@@ -32,6 +32,7 @@ import pinocchio as pin
 
 from .errors import InputError, SimulationError
 from .robot import Robot
+from .validation import finite_vector, positive_number
 
 if TYPE_CHECKING:
     import mujoco
@@ -74,7 +75,7 @@ class Plant(ABC):
 
     def __init__(self, robot: Robot, max_step: float = DEFAULT_MAX_STEP):
         self.robot = robot
-        self.max_step = _positive("max_step", max_step, "a finite number > 0 [s]")
+        self.max_step = positive_number("max_step", max_step, "a finite number > 0 [s]")
         self._q = np.zeros(robot.dof)
         self._qd = np.zeros(robot.dof)
         self.time = 0.0
@@ -97,8 +98,8 @@ class Plant(ABC):
         Raises:
             InputError: a vector of the wrong length or with non-finite entries.
         """
-        self._q = _vector("q", q, self.dof)
-        self._qd = np.zeros(self.dof) if qd is None else _vector("qd", qd, self.dof)
+        self._q = finite_vector("q", q, self.dof)
+        self._qd = np.zeros(self.dof) if qd is None else finite_vector("qd", qd, self.dof)
         self.time = 0.0
         self._load_state()
         return self.state
@@ -119,9 +120,9 @@ class Plant(ABC):
         ):
             tau = torque
         else:
-            tau = _vector("torque", torque, self.dof)
+            tau = finite_vector("torque", torque, self.dof)
         if duration != self._last_duration:
-            duration = _positive("duration", duration, "a finite number > 0 [s]")
+            duration = positive_number("duration", duration, "a finite number > 0 [s]")
             self._last_substeps = max(1, math.ceil(duration / self.max_step - 1e-9))
             self._last_duration = duration
         substeps = self._last_substeps
@@ -222,7 +223,7 @@ class MujocoPlant(Plant):
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """MuJoCo's joint-space inertia matrix [kg m^2] at ``q``, in Pinocchio's joint order."""
         mj, data = self._mujoco, self._query
-        data.qpos[self._qpos_index] = _vector("q", q, self.dof)
+        data.qpos[self._qpos_index] = finite_vector("q", q, self.dof)
         mj.mj_forward(self.model, data)
         full = np.zeros((self.model.nv, self.model.nv))
         mj.mj_fullM(self.model, data, full)
@@ -231,8 +232,8 @@ class MujocoPlant(Plant):
     def bias_forces(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """MuJoCo's ``C(q, qd) qd + g(q)`` [N m or N] (``qfrc_bias``), in Pinocchio's order."""
         mj, data = self._mujoco, self._query
-        data.qpos[self._qpos_index] = _vector("q", q, self.dof)
-        data.qvel[self._dof_index] = _vector("qd", qd, self.dof)
+        data.qpos[self._qpos_index] = finite_vector("q", q, self.dof)
+        data.qvel[self._dof_index] = finite_vector("qd", qd, self.dof)
         mj.mj_forward(self.model, data)
         return data.qfrc_bias[self._dof_index].copy()
 
@@ -471,26 +472,3 @@ def _check_links_match_bodies(robot: Robot, tolerance: float = 1e-9) -> None:
                 source=robot.urdf_path,
                 field=f"joint.{robot.model.names[j]}",
             )
-
-
-# ============================================================================== validation
-def _vector(name: str, value: Any, length: int) -> np.ndarray:
-    try:
-        vector = np.array(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise InputError(f"{value!r} is not a vector of numbers", field=name) from None
-    if vector.shape != (length,):
-        raise InputError(f"{name}.shape={vector.shape} but dof={length}", field=name)
-    if not np.isfinite(vector).all():
-        raise InputError(f"{vector.tolist()} has non-finite entries", field=name)
-    return vector
-
-
-def _positive(name: str, value: Any, expected: str) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{value!r} is not a number; expected {expected}", field=name) from None
-    if not (math.isfinite(number) and number > 0):
-        raise InputError(f"{value!r} is out of range; expected {expected}", field=name)
-    return number

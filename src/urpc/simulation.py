@@ -40,6 +40,7 @@ from .errors import InputError, SimulationError
 from .plants import PLANTS, Plant, make_plant
 from .results import SimulationResult
 from .robot import Robot
+from .validation import finite_vector, positive_number
 
 #: Default continuous-time integrator and tolerances, chosen by measurement on the paper's
 #: scenario 1 (10 s): the interval law (Kr = 95/s, phi up to ~1.5e3) is stiff-ish, and the r-alpha
@@ -124,9 +125,9 @@ def simulate(
     start = time.perf_counter()
     n = plant.dof
     reference0 = trajectory.reference(0.0)
-    q0 = _vector("q0", reference0.q if q0 is None else q0, n)
-    qd0 = _vector("qd0", reference0.qd if qd0 is None else qd0, n)
-    duration = _positive("duration", duration, "a finite number > 0 [s]")
+    q0 = finite_vector("q0", reference0.q if q0 is None else q0, n)
+    qd0 = finite_vector("qd0", reference0.qd if qd0 is None else qd0, n)
+    duration = positive_number("duration", duration, "a finite number > 0 [s]")
     if epsilon is None:
         epsilon = getattr(controller, "epsilon", None)
         if epsilon is None:
@@ -134,7 +135,7 @@ def simulate(
                 f"controller '{controller.name}' has no epsilon; pass the required precision",
                 field="epsilon",
             )
-    epsilon = _positive("epsilon", epsilon, "a finite number > 0 [rad]")
+    epsilon = positive_number("epsilon", epsilon, "a finite number > 0 [rad]")
     disturbance_bound = float(disturbance_bound)
     if not (math.isfinite(disturbance_bound) and disturbance_bound >= 0):
         raise InputError(
@@ -161,7 +162,7 @@ def simulate(
         )
     state0 = controller.initial_state()
     if controller_state0 is not None:
-        state0 = _vector("controller_state0", controller_state0, controller.n_states)
+        state0 = finite_vector("controller_state0", controller_state0, controller.n_states)
     common = dict(
         controller=controller.name,
         epsilon=epsilon,
@@ -181,16 +182,16 @@ def simulate(
                     "or set disturbance_bound to 0 for continuous time",
                     field="disturbance_bound",
                 )
-            rate = _positive("output_rate", output_rate, "a finite number > 0 [Hz]")
+            rate = positive_number("output_rate", output_rate, "a finite number > 0 [Hz]")
             series, info = _continuous(setup, method, rtol, atol, rate)
         else:
-            period = _positive("sample_period", sample_period, "a finite number > 0 [s]")
+            period = positive_number("sample_period", sample_period, "a finite number > 0 [s]")
             if period > duration:
                 raise InputError(
                     f"{period!r} s is longer than the duration {duration!r} s",
                     field="sample_period",
                 )
-            step = _positive("integration_step", integration_step, "a finite number > 0 [s]")
+            step = positive_number("integration_step", integration_step, "a finite number > 0 [s]")
             stepper = make_plant(plant_backend, plant, max_step=step)
             series, info = _sampled(setup, stepper, period, disturbance_bound, int(seed))
             duration = float(series["t"][-1])
@@ -453,26 +454,6 @@ def _diverged(t: float, q: np.ndarray, qd: np.ndarray, reason: str):
             f"the simulation diverged at t = {t:.6g} s ({reason}): q = {np.asarray(q)} rad, "
             f"qd = {np.asarray(qd)} rad/s"
         )
-
-
-def _vector(field: str, value: Any, n: int) -> np.ndarray:
-    try:
-        vector = np.array(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise InputError(f"{value!r} is not a vector of {n} numbers", field=field) from None
-    if vector.shape != (n,) or not np.isfinite(vector).all():
-        raise InputError(f"{value!r} must be {n} finite numbers", field=field)
-    return vector
-
-
-def _positive(field: str, value: Any, expected: str) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{value!r} is not a number; expected {expected}", field=field) from None
-    if not (math.isfinite(number) and number > 0):
-        raise InputError(f"{value!r} is out of range; expected {expected}", field=field)
-    return number
 
 
 class _Progress:

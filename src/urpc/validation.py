@@ -1,0 +1,42 @@
+"""Checks of numeric arguments at the API boundary: one :class:`~urpc.errors.InputError` naming
+the argument, instead of a numpy error (or a silent NaN) deep inside a simulation."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from .errors import InputError
+
+
+def finite_vector(field: str, value: Any, n: int) -> np.ndarray:
+    """``value`` as a float vector of ``n`` finite entries.
+
+    Raises:
+        InputError: not numbers, another length, or a NaN or infinite entry (``field`` named).
+    """
+    try:
+        vector = np.array(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"{value!r} is not a vector of {n} numbers", field=field) from None
+    if vector.shape != (n,) or not np.isfinite(vector).all():
+        raise InputError(f"{value!r} must be {n} finite numbers", field=field)
+    return vector
+
+
+def positive_number(field: str, value: Any, expected: str) -> float:
+    """``value`` as a finite float ``> 0``; ``expected`` completes the message
+    (e.g. ``"a finite number > 0 [s]"``).
+
+    Raises:
+        InputError: not a number, or out of range (``field`` named).
+    """
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{value!r} is not a number; expected {expected}", field=field) from None
+    if not (math.isfinite(number) and number > 0):
+        raise InputError(f"{value!r} is out of range; expected {expected}", field=field)
+    return number
