@@ -146,6 +146,30 @@ def test_tool_change_with_the_default_settings_meets_epsilon(tmp_path):
     assert 0 < summary["switch_time"] < 1.0
 
 
+def test_a_start_off_the_reference_adapts_and_meets_epsilon_at_1_khz():
+    """Starting 0.02 rad (2 epsilon) off the reference on every joint, the gains must adapt under
+    the 1 kHz zero-order hold; with the default synthesis (sampled-data gain limit) the run enters
+    the ball and stays inside (the paper's law alone diverges here: docs/modular.md)."""
+    run = run_configuration("arm_4dof", duration=0.6, initial_offset=0.02, repeats=1)
+    assert run.failure is None
+    metrics = run.result.metrics
+    assert run.result.error_norm[0] > run.result.epsilon
+    assert run.result.phi.max() > 1.0  # the gains adapted
+    assert metrics["met"] and 0 < metrics["entry_time"] < 0.15
+
+
+def test_late_switch_at_1_khz_leaves_the_ball_and_comes_back():
+    """At the demo's 1 kHz with the controller told 50 ms late, the heavier payload pushes the
+    error out of the ball and the gains adapt under the zero-order hold (the sampled-data gain
+    limit keeps that stable): the error is back inside within 0.1 s and stays there."""
+    run = tool_change_run(t_change=0.3, duration=1.2, switch_delay=0.05)
+    assert run.result.sample_period == 1e-3
+    summary = run.summary()
+    assert summary["max_error_after_change"] > run.result.epsilon  # left the ball ...
+    assert 0 < run.reentry_time < 0.1  # ... and came back
+    assert summary["met_after"] and summary["met"]
+
+
 def test_tool_change_needs_the_same_joints():
     with pytest.raises(InputError, match="keeps the joints"):
         tool_change_run("arm_3dof", "arm_4dof", t_change=0.1, duration=0.2)
