@@ -33,8 +33,8 @@ Everything before the maxima is linear in ``Y_SL``: per (joint, link), one produ
 gives the vertex values of ``G``, the curvature terms, the edge differences, the linear part and
 the radius terms; maxima, margins and sums follow. One compiled call (:func:`vertex_extent`,
 numba) does all of it for every (joint, link) pair, skipping the links a joint does not carry:
-per control step it costs a few microseconds on a 7-joint arm, where the same work as about 15
-vectorized numpy calls cost 10-20 us of call overhead alone.
+on a 7-joint arm it costs a few microseconds per control step, where the same work done by about
+15 vectorized numpy calls cost 10-20 us in call overhead alone.
 
 Rounding: the result is inflated by ``base.ROUNDING_RELATIVE`` times ``sum_j |Y_ij| p_j``, where
 ``p_j`` bounds ``|pi_j| + |pi0_j|`` over the box in body coordinates (every term of every sum above
