@@ -47,15 +47,11 @@ def main(argv: list[str] | None = None) -> int:
     result = bench_bounds(args.robots, args.methods, args.repeats)
     machine = format_machine(machine_info())
     text = format_timings(result)
-    scaling = ", ".join(
-        f"{s['dof']} joints x {s['links']} links: {1e6 * s['vertex']:.1f} us"
-        for s in result["scaling"].values()
-    )
-    print(f"{machine}\n\n{text}\n\nvertex scaling: {scaling}")
+    print(f"{machine}\n\n{text}")
     if args.write_docs:
         document = DOCS.read_text()
         pattern = re.compile(re.escape(MARKERS[0]) + ".*?" + re.escape(MARKERS[1]), re.S)
-        block = f"{MARKERS[0]}\n{machine}:\n\n{text}\n\nvertex scaling: {scaling}\n{MARKERS[1]}"
+        block = f"{MARKERS[0]}\n{machine}:\n\n{text}\n{MARKERS[1]}"
         DOCS.write_text(pattern.sub(lambda _: block, document))
     return 0
 

@@ -186,7 +186,8 @@ def _time_robot(
 
 
 def format_timings(result: dict[str, dict]) -> str:
-    """A Markdown table of :func:`bench_bounds` results (microseconds, and ratios to RNEA)."""
+    """A Markdown table of :func:`bench_bounds` results (microseconds, and ratios to RNEA),
+    followed by the ``vertex scaling`` line when ``vertex`` was timed."""
     robots = list(result["rho"])
     methods = list(dict.fromkeys(m for r in robots for m in result["rho"][r]))
     lines = [
@@ -202,6 +203,12 @@ def format_timings(result: dict[str, dict]) -> str:
         lines.append(
             f"| {robot} | {dof} | {1e6 * result['rnea'][robot]:.2f} | " + " | ".join(cells) + " |"
         )
+    if result["scaling"]:
+        scaling = ", ".join(
+            f"{s['dof']} joints x {s['links']} links: {1e6 * s['vertex']:.1f} us"
+            for s in result["scaling"].values()
+        )
+        lines += ["", f"vertex scaling: {scaling}"]
     return "\n".join(lines)
 
 
@@ -423,12 +430,7 @@ def control_setup(robot_name: str):
     """
     from .scenario import build, build_controller, load_scenario
 
-    if robot_name not in CONTROL_SCENARIOS:
-        valid = ", ".join(CONTROL_SCENARIOS)
-        raise InputError(
-            f"no control scenario for robot '{robot_name}'; valid: {valid}", field="robot"
-        )
-    setup = build(load_scenario(CONTROL_SCENARIOS[robot_name]))
+    setup = build(load_scenario(_control_scenario(robot_name)))
     controller = build_controller(setup, "interval")
     t = 1.3
     reference = setup.trajectory.reference(t)
@@ -438,6 +440,20 @@ def control_setup(robot_name: str):
     qd = reference.qd.copy()
     state = controller.initial_state() + 0.05
     return setup, controller, (t, q, qd, reference, state)
+
+
+def _control_scenario(robot_name: str) -> str:
+    """The :data:`CONTROL_SCENARIOS` entry of a robot.
+
+    Raises:
+        InputError: a robot without an entry (the message lists them).
+    """
+    if robot_name not in CONTROL_SCENARIOS:
+        valid = ", ".join(CONTROL_SCENARIOS)
+        raise InputError(
+            f"no control scenario for robot '{robot_name}'; valid: {valid}", field="robot"
+        )
+    return CONTROL_SCENARIOS[robot_name]
 
 
 def _control_step_call(robot_name: str) -> Callable[[], object]:
@@ -579,23 +595,16 @@ def simulation_speed(scenario_name: str, duration: float | None = None) -> float
 def synthesis_time(robot_name: str, repeats: int = 7) -> float:
     """Median wall time [s] of ``load_robot + load_uncertainty + synthesize`` with the settings
     of the robot's :data:`CONTROL_SCENARIOS` entry (after one untimed warm-up run)."""
-    from .scenario import load_scenario
+    from .scenario import interval_synthesis_options, load_scenario
     from .synthesis import synthesize
 
-    if robot_name not in CONTROL_SCENARIOS:
-        valid = ", ".join(CONTROL_SCENARIOS)
-        raise InputError(
-            f"no control scenario for robot '{robot_name}'; valid: {valid}", field="robot"
-        )
-    scenario = load_scenario(CONTROL_SCENARIOS[robot_name])
-    options = dict(scenario.controller_options["interval"])
-    limit = options.pop("sampled_gain_limit", True)
-    sample_period = scenario.sample_period if limit else None
+    scenario = load_scenario(_control_scenario(robot_name))
+    options = interval_synthesis_options(scenario)
 
     def chain() -> None:
         robot = load_robot(scenario.robot, scenario.locked_joints)
         box = load_uncertainty(scenario.uncertainty, robot)
-        synthesize(robot, box, scenario.epsilon, sample_period=sample_period, **options)
+        synthesize(robot, box, scenario.epsilon, **options)
 
     chain()  # warm-up: imports and the example-robot-data lookup happen once per process
     samples = []

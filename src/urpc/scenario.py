@@ -873,6 +873,17 @@ def _within_limits(
     return trajectory
 
 
+def interval_synthesis_options(scenario: Scenario) -> dict[str, Any]:
+    """The keyword arguments of :func:`urpc.synthesis.synthesize` for the scenario's ``interval``
+    options: sampled runs pass their ``sample_period`` (each inertia mode's gain capped at its
+    dead-beat value) unless the scenario asks for the paper's law unchanged
+    (``sampled_gain_limit: false``)."""
+    options = dict(scenario.controller_options["interval"])
+    if options.pop("sampled_gain_limit", True) and scenario.sample_period is not None:
+        options["sample_period"] = scenario.sample_period
+    return options
+
+
 def build_controller(setup: ScenarioSetup, controller: str | None = None) -> Controller:
     """Synthesize the scenario's controller (or ``controller``, one of :data:`CONTROLLERS`) with
     its options from the scenario.
@@ -899,10 +910,7 @@ def build_controller(setup: ScenarioSetup, controller: str | None = None) -> Con
         if name == "interval":
             from .synthesis import synthesize
 
-            # Sampled runs cap each inertia mode's gain at its dead-beat value unless the scenario
-            # asks for the paper's law unchanged (sampled_gain_limit: false).
-            if options.pop("sampled_gain_limit", True) and scenario.sample_period is not None:
-                options["sample_period"] = scenario.sample_period
+            options = interval_synthesis_options(scenario)
             return synthesize(setup.robot, setup.box, scenario.epsilon, **options)
         if name == "computed-torque":
             from .control.computed_torque import synthesize_computed_torque

@@ -130,7 +130,6 @@ class VertexBound(BoundMethod):
                 scale * ROUNDING_RELATIVE * (np.abs(A) @ magnitude)
             )
         self._bodies = np.array([body for body, _ in placements], dtype=np.int64)
-        self._layout = layout
         self._sizes = layout.sizes()
         self._products = np.zeros(layout.n_products)
         self._Y4 = np.zeros((self.robot.dof, 10 * n_bodies))

@@ -103,12 +103,6 @@ def run_bench_bounds(args) -> int:
         return EXIT_OK
     print(f"{format_machine(machine)}\n")
     print(format_timings(result))
-    if result["scaling"]:
-        scaling = ", ".join(
-            f"{s['dof']} joints x {s['links']} links: {1e6 * s['vertex']:.1f} us"
-            for s in result["scaling"].values()
-        )
-        print(f"\nvertex scaling: {scaling}")
     return EXIT_OK
 
 
