@@ -1,1 +1,1 @@
-"""Built-in robot descriptions shipped with urpc (a data package; see urpc.catalog)."""
+"""Built-in robot descriptions shipped with urpc (a data package; see urpc.model.catalog)."""

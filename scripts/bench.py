@@ -6,8 +6,8 @@
     python scripts/bench.py --profile       # also: where one control step's time goes
     python scripts/bench.py --profile-only  # only the control-step profile
 
-Both run :func:`urpc.benchmark.run_benchmarks`; the profile is
-:func:`urpc.benchmark.profile_control_step` (parts of one control step timed side by side).
+Both run :func:`urpc.studies.benchmark.run_benchmarks`; the profile is
+:func:`urpc.studies.benchmark.profile_control_step` (parts of one control step timed side by side).
 """
 
 from __future__ import annotations
@@ -16,7 +16,8 @@ import argparse
 import json
 import sys
 
-from urpc.benchmark import (
+from urpc.cli.common import jsonable
+from urpc.studies.benchmark import (
     BENCHMARK_ROBOTS,
     SuiteSettings,
     format_benchmarks,
@@ -26,7 +27,6 @@ from urpc.benchmark import (
     profile_control_step,
     run_benchmarks,
 )
-from urpc.cli.common import jsonable
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -5,7 +5,7 @@
     python scripts/bench_bounds.py --write-docs             # also replace the table in docs/bounds.md
 
 Figures are medians over timed batches of the CPU time of the calling thread
-(:func:`urpc.benchmark.bench_bounds`), with one nominal ``pinocchio.rnea`` call timed in the same
+(:func:`urpc.studies.benchmark.bench_bounds`), with one nominal ``pinocchio.rnea`` call timed in the same
 run for scale. ``urpc bench bounds`` prints the same table (default methods: hull, vertex,
 rigorous); ``urpc bench`` and ``scripts/bench.py`` run the whole performance suite.
 """
@@ -16,7 +16,8 @@ import argparse
 import re
 from pathlib import Path
 
-from urpc.benchmark import (
+from urpc.bounds import METHODS
+from urpc.studies.benchmark import (
     BENCHMARK_ROBOTS,
     VARIANTS,
     bench_bounds,
@@ -24,7 +25,6 @@ from urpc.benchmark import (
     format_timings,
     machine_info,
 )
-from urpc.bounds import METHODS
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "bounds.md"
 MARKERS = ("<!-- timing:begin -->", "<!-- timing:end -->")

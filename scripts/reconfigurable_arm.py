@@ -2,7 +2,7 @@
 """The reconfigurable-arm demo, as a script: the same as ``urpc demo reconfigure``.
 
 Runs the shipped assemblies arm_3dof, arm_4dof and arm_4dof_vacuum in turn, each synthesized on
-the fly with the same default settings (:func:`urpc.demo.reconfigure_demo`), and writes the figure
+the fly with the same default settings (:func:`urpc.studies.demo.reconfigure_demo`), and writes the figure
 and the summary into ``--out`` (default ``urpc-results/reconfigure``)::
 
     python scripts/reconfigurable_arm.py [--out DIR] [--json] [--no-progress] [--duration S]

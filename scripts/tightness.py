@@ -5,7 +5,7 @@
 
 The sampled inner hull is the range of ``w`` over uniform draws of the box plus all its vertices
 (random vertices when there are more than 1024), each sample a plant built with Pinocchio
-(:func:`urpc.benchmark.tightness`). A ratio is >= 1 for a sound method; joints the box cannot move
+(:func:`urpc.studies.benchmark.tightness`). A ratio is >= 1 for a sound method; joints the box cannot move
 are left out. Takes a minute or two.
 """
 
@@ -16,10 +16,10 @@ import re
 import sys
 from pathlib import Path
 
-from urpc.benchmark import benchmark_box, benchmark_robot, tightness
 from urpc.bounds import METHODS
-from urpc.catalog import default_uncertainty
-from urpc.uncertainty import load_uncertainty, parse_uncertainty
+from urpc.model.catalog import default_uncertainty
+from urpc.model.uncertainty import load_uncertainty, parse_uncertainty
+from urpc.studies.benchmark import benchmark_box, benchmark_robot, tightness
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "bounds.md"
 MARKERS = ("<!-- tightness:begin -->", "<!-- tightness:end -->")

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from urpc.robot import load_robot
-from urpc.uncertainty import load_parameter_point, load_uncertainty
+from urpc.model.robot import load_robot
+from urpc.model.uncertainty import load_parameter_point, load_uncertainty
 
 ROOT = Path(__file__).resolve().parents[1]
 RR_DIR = ROOT / "robots" / "rr_planar"

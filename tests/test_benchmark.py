@@ -1,4 +1,4 @@
-"""The performance suite (``urpc.benchmark.run_benchmarks``, ``urpc bench``): structure only.
+"""The performance suite (``urpc.studies.benchmark.run_benchmarks``, ``urpc bench``): structure only.
 
 Speed targets are not asserted (the machine is shared); the tests check that every figure is
 there, positive and finite, on a tiny configuration that runs in a few seconds.
@@ -12,7 +12,7 @@ import math
 import pytest
 
 from urpc.__main__ import main
-from urpc.benchmark import (
+from urpc.studies.benchmark import (
     SUITE_KEYS,
     SuiteSettings,
     format_benchmarks,

@@ -22,8 +22,8 @@ from urpc.bounds import METHODS, default_method, make_bound
 from urpc.bounds.base import ROUNDING_ABSOLUTE
 from urpc.bounds.vertex import VertexBound, curvature_directions, unit_mass_parameters
 from urpc.errors import InputError
-from urpc.regressor import SlotineLiRegressor
-from urpc.uncertainty import LinkBox, ParameterBox, parse_uncertainty
+from urpc.model.regressor import SlotineLiRegressor
+from urpc.model.uncertainty import LinkBox, ParameterBox, parse_uncertainty
 
 #: The registered methods, plus the vertex method with its plain curvature margin.
 ALL_METHODS = [*sorted(METHODS), "vertex-plain"]

@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 
 from urpc.__main__ import main
-from urpc.campaign import (
+from urpc.errors import InputError
+from urpc.model.uncertainty import LinkBox, ParameterBox
+from urpc.studies.campaign import (
     HISTOGRAM_NAME,
     RUNS_NAME,
     SUMMARY_NAME,
@@ -21,9 +23,7 @@ from urpc.campaign import (
     run_campaign,
     run_one,
 )
-from urpc.errors import InputError
-from urpc.scenario import build, load_scenario, run_scenario
-from urpc.uncertainty import LinkBox, ParameterBox
+from urpc.studies.scenario import build, load_scenario, run_scenario
 
 SUMMARY_KEYS = {
     "runs", "met_fraction", "worst_final_error_over_epsilon", "worst_entry_time",

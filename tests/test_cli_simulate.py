@@ -17,10 +17,10 @@ import yaml
 from conftest import RR_DIR
 
 from urpc.__main__ import main
-from urpc.metrics import METRIC_NAMES
-from urpc.results import SimulationResult
-from urpc.robot import inertia_problem
-from urpc.scenario import build, load_scenario, run_scenario, sample_true_parameters
+from urpc.model.robot import inertia_problem
+from urpc.sim.metrics import METRIC_NAMES
+from urpc.sim.results import SimulationResult
+from urpc.studies.scenario import build, load_scenario, run_scenario, sample_true_parameters
 
 SUMMARY_KEYS = {*METRIC_NAMES, "epsilon", "controller", "scenario", "plant", "true_parameters"}
 TIMINGS = ("step_time_median", "wall_time")

@@ -1,4 +1,4 @@
-"""The reconfigurable-arm demo and the tool change (urpc.demo, `urpc demo`)."""
+"""The reconfigurable-arm demo and the tool change (urpc.studies.demo, `urpc demo`)."""
 
 from __future__ import annotations
 
@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 
 from urpc.__main__ import main
-from urpc.demo import (
+from urpc.errors import InputError
+from urpc.model.modular import load_assembly
+from urpc.studies.demo import (
     DEFAULT_CONFIGURATIONS,
     concatenate,
     reconfigure_demo,
     run_configuration,
     tool_change_run,
 )
-from urpc.errors import InputError
-from urpc.modular import load_assembly
 
 ROOT = Path(__file__).resolve().parents[1]
 METRIC_KEYS = ("entry_time", "max_error_after_entry", "final_error", "torque_rms", "wall_time")

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from urpc.campaign import RUNS_NAME, run_campaign
-from urpc.scenario import load_scenario, run_scenario
+from urpc.studies.campaign import RUNS_NAME, run_campaign
+from urpc.studies.scenario import load_scenario, run_scenario
 
 #: Every time series of a SimulationResult.
 SERIES = (

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from urpc.errors import SimulationError
-from urpc.scenario import build, build_controller, load_scenario, run_scenario
+from urpc.studies.scenario import build, build_controller, load_scenario, run_scenario
 
 SCENARIOS = ("ur5/sampled", "ur5/heavy_payload", "panda/sampled", "panda/heavy_payload")
 

@@ -21,9 +21,9 @@ from urpc.bounds import default_method
 from urpc.bounds.hull import HullBound
 from urpc.control.base import Reference
 from urpc.control.interval import IntervalPassivityController
+from urpc.control.synthesis import synthesize
 from urpc.errors import InputError
-from urpc.simulation import simulate
-from urpc.synthesis import synthesize
+from urpc.sim.simulation import simulate
 
 NOMINAL = dict(m2=5.0, lc2=0.5, I2=5 / 12)
 TRUE = dict(m2=10.0, lc2=0.525, I2=20 / 12)
@@ -31,7 +31,7 @@ TRUE = dict(m2=10.0, lc2=0.525, I2=20 / 12)
 
 class PaperTrajectory:
     """``q_d(t) = (pi/4, -pi/8) sin(pi t/2) sin(pi t)`` with analytic derivatives (local to the
-    tests, independent of ``urpc.trajectories``)."""
+    tests, independent of ``urpc.sim.trajectories``)."""
 
     amplitude = np.array([np.pi / 4, -np.pi / 8])
 

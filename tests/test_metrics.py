@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from urpc.metrics import METRIC_NAMES, series_metrics
+from urpc.sim.metrics import METRIC_NAMES, series_metrics
 
 EPSILON = 1e-2
 

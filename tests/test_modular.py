@@ -1,6 +1,6 @@
 """Modular arms: module files, composition into one URDF and one box, errors.
 
-The references here are independent of ``urpc.modular``: the module files are read with plain
+The references here are independent of ``urpc.model.modular``: the module files are read with plain
 ``yaml``, the equivalent URDF is written by hand (module frames reached through chains of
 single-axis fixed joints, so no transform is composed in the test), and Pinocchio compares the
 dynamics.
@@ -18,9 +18,9 @@ import pytest
 import yaml
 
 from urpc.errors import InputError
-from urpc.modular import assemble, load_assembly, load_module_library
-from urpc.robot import inertia_problem, load_robot
-from urpc.uncertainty import PHYSICAL_FIELDS, load_uncertainty, physical_coordinates
+from urpc.model.modular import assemble, load_assembly, load_module_library
+from urpc.model.robot import inertia_problem, load_robot
+from urpc.model.uncertainty import PHYSICAL_FIELDS, load_uncertainty, physical_coordinates
 
 ROOT = Path(__file__).resolve().parents[1]
 MODULES = ROOT / "robots" / "modules"

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from urpc.scenario import load_scenario, run_scenario
+from urpc.studies.scenario import load_scenario, run_scenario
 
 pytest.importorskip("mujoco")
 

@@ -1,4 +1,4 @@
-"""``urpc.paper.reproduce_paper`` and ``urpc reproduce-paper`` on very short runs.
+"""``urpc.studies.paper.reproduce_paper`` and ``urpc reproduce-paper`` on very short runs.
 
 References: each parallel run equals a serial in-process run of the same shipped scenario
 (bit for bit); the betas equal an in-process ``estimate_betas``; the report's table and JSON agree
@@ -16,12 +16,12 @@ from conftest import RR_DIR
 
 from urpc.__main__ import main
 from urpc.control.r_alpha import PAPER_BETAS, estimate_betas
-from urpc.metrics import METRIC_NAMES
-from urpc.paper import PAPER_CONTROLLERS, PAPER_RUNS, reproduce_paper
-from urpc.results import SimulationResult, write_files
-from urpc.robot import load_robot
-from urpc.scenario import load_scenario, run_scenario
-from urpc.uncertainty import load_uncertainty
+from urpc.model.robot import load_robot
+from urpc.model.uncertainty import load_uncertainty
+from urpc.sim.metrics import METRIC_NAMES
+from urpc.sim.results import SimulationResult, write_files
+from urpc.studies.paper import PAPER_CONTROLLERS, PAPER_RUNS, reproduce_paper
+from urpc.studies.scenario import load_scenario, run_scenario
 
 DURATION = 0.3
 FIGURES = {

@@ -1,4 +1,4 @@
-"""Tests of :mod:`urpc.plants`.
+"""Tests of :mod:`urpc.sim.plants`.
 
 References, each independent of the code under test:
 
@@ -22,8 +22,8 @@ from conftest import PANDA_FINGERS, rr_closed_form
 from scipy.integrate import solve_ivp
 
 from urpc.errors import InputError, SimulationError
-from urpc.plants import PinocchioPlant, PlantState, make_plant
-from urpc.robot import LinkInertial, Robot, load_robot
+from urpc.model.robot import LinkInertial, Robot, load_robot
+from urpc.sim.plants import PinocchioPlant, PlantState, make_plant
 
 #: Open-loop agreement of the two plants at equal RK4 steps [rad or m]. Both integrate with the
 #: same classical RK4 scheme and step, so they differ only by the rounding of two different

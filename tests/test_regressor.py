@@ -8,8 +8,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from urpc.regressor import SlotineLiRegressor, link_regressor_map, placement_matrix
-from urpc.robot import load_robot
+from urpc.model.regressor import SlotineLiRegressor, link_regressor_map, placement_matrix
+from urpc.model.robot import load_robot
 
 
 def random_state(rng: np.random.Generator, dof: int, scale: float = 1.0):

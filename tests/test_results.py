@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from urpc import plotting
 from urpc.control.base import Reference
+from urpc.control.synthesis import synthesize
 from urpc.errors import InputError
-from urpc.metrics import METRIC_NAMES
-from urpc.results import SimulationResult
-from urpc.simulation import CONTINUOUS_METHOD, simulate
-from urpc.synthesis import synthesize
+from urpc.sim import plotting
+from urpc.sim.metrics import METRIC_NAMES
+from urpc.sim.results import SimulationResult
+from urpc.sim.simulation import CONTINUOUS_METHOD, simulate
 
 
 class PaperTrajectory:

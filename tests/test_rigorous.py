@@ -26,9 +26,9 @@ from urpc.bounds import METHODS, make_bound
 from urpc.bounds.hull import HullBound
 from urpc.bounds.rigorous import RigorousBound, interval_ball, lower_float, upper_float
 from urpc.errors import InputError, UrpcError
-from urpc.regressor import SlotineLiRegressor, link_regressor_map
-from urpc.robot import load_robot
-from urpc.uncertainty import ParameterBox, load_uncertainty, parse_uncertainty
+from urpc.model.regressor import SlotineLiRegressor, link_regressor_map
+from urpc.model.robot import load_robot
+from urpc.model.uncertainty import ParameterBox, load_uncertainty, parse_uncertainty
 
 #: Absolute slack [N m] granted to the *floating-point references* (Pinocchio, numpy), whose own
 #: rounding is ~1e-13 here; the enclosure itself is never inflated.

@@ -8,8 +8,8 @@ import pytest
 from conftest import PANDA_FINGERS, rr_closed_form
 
 from urpc.errors import InputError
-from urpc.robot import load_robot
-from urpc.uncertainty import inertia_from_physical
+from urpc.model.robot import load_robot
+from urpc.model.uncertainty import inertia_from_physical
 
 
 def test_rr_arm_matches_textbook_model_inside_the_box(rr, rr_box):

@@ -15,10 +15,10 @@ from conftest import rr_closed_form
 from scipy.integrate import solve_ivp
 
 from urpc.control.base import Controller, Reference
+from urpc.control.synthesis import synthesize
 from urpc.errors import InputError, SimulationError
-from urpc.metrics import METRIC_NAMES
-from urpc.simulation import CONTINUOUS_METHOD, ball_samples, simulate
-from urpc.synthesis import synthesize
+from urpc.sim.metrics import METRIC_NAMES
+from urpc.sim.simulation import CONTINUOUS_METHOD, ball_samples, simulate
 
 TRUE = dict(m2=10.0, lc2=0.525, I2=20 / 12)
 

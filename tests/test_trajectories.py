@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from urpc.errors import InputError
-from urpc.trajectories import (
+from urpc.sim.trajectories import (
     PaperTrajectory,
     QuinticTrajectory,
     SinusoidTrajectory,

@@ -10,8 +10,8 @@ from conftest import RR_DIR
 
 from urpc.__main__ import main
 from urpc.errors import InputError
-from urpc.robot import load_robot
-from urpc.uncertainty import (
+from urpc.model.robot import load_robot
+from urpc.model.uncertainty import (
     BARYCENTRIC_FIELDS,
     PHYSICAL_FIELDS,
     load_parameter_point,
@@ -220,7 +220,7 @@ def test_spatial_inertia_round_trip():
     for _ in range(10):
         A = rng.normal(size=(3, 3))
         inertia = pin.Inertia(rng.uniform(0.1, 5), rng.normal(size=3), A @ A.T)
-        from urpc.uncertainty import inertia_from_physical
+        from urpc.model.uncertainty import inertia_from_physical
 
         back = inertia_from_physical(physical_coordinates(inertia))
         np.testing.assert_allclose(back.toDynamicParameters(), inertia.toDynamicParameters())

@@ -10,14 +10,19 @@ The main entry points::
 from .bounds import METHODS as BOUND_METHODS
 from .bounds import BoundMethod, default_method, make_bound
 from .control.interval import IntervalPassivityController
+from .control.synthesis import synthesize
 from .errors import InputError, SimulationError, UrpcError
-from .metrics import METRIC_NAMES
-from .modular import Assembly, assemble, load_assembly, load_module_library
-from .results import SimulationResult
-from .robot import Robot, load_robot
-from .simulation import simulate
-from .synthesis import synthesize
-from .uncertainty import ParameterBox, load_parameter_point, load_uncertainty, parse_uncertainty
+from .model.modular import Assembly, assemble, load_assembly, load_module_library
+from .model.robot import Robot, load_robot
+from .model.uncertainty import (
+    ParameterBox,
+    load_parameter_point,
+    load_uncertainty,
+    parse_uncertainty,
+)
+from .sim.metrics import METRIC_NAMES
+from .sim.results import SimulationResult
+from .sim.simulation import simulate
 
 __version__ = "0.1.0"
 

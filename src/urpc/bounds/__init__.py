@@ -6,8 +6,8 @@
 from __future__ import annotations
 
 from ..errors import InputError
-from ..robot import Robot
-from ..uncertainty import ParameterBox
+from ..model.robot import Robot
+from ..model.uncertainty import ParameterBox
 from .base import BoundMethod
 from .hull import HullBound
 from .rigorous import RigorousBound

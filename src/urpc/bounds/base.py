@@ -17,9 +17,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..regressor import placement_matrix
-from ..robot import Robot
-from ..uncertainty import ParameterBox
+from ..model.regressor import placement_matrix
+from ..model.robot import Robot
+from ..model.uncertainty import ParameterBox
 
 #: Relative inflation of the fast methods' enclosures, applied to the sum of absolute values of the
 #: terms (so it covers the rounding of every product and sum, including Pinocchio's). Double
@@ -66,9 +66,9 @@ class BoundMethod(ABC):
 
     @property
     def regressor(self):
-        """The :class:`~urpc.regressor.SlotineLiRegressor` of the nominal robot (shared)."""
+        """The :class:`~urpc.model.regressor.SlotineLiRegressor` of the nominal robot (shared)."""
         if not hasattr(self, "_regressor"):
-            from ..regressor import SlotineLiRegressor
+            from ..model.regressor import SlotineLiRegressor
 
             self._regressor = SlotineLiRegressor(self.robot)
         return self._regressor

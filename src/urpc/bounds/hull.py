@@ -11,7 +11,7 @@ the enclosure forgets that ``m``, ``h`` and ``I_O`` are coupled (``docs/bounds.m
 
 A link whose frame is its joint's frame (the child link of a URDF joint) has its parameters in
 ``Y``'s own columns, so its radius is a plain ``|Y| pi_r``. Other links (a payload, a hand fixed to
-the flange) see ``Y A``, with ``A`` the placement matrix of :func:`~urpc.regressor.placement_matrix`,
+the flange) see ``Y A``, with ``A`` the placement matrix of :func:`~urpc.model.regressor.placement_matrix`,
 and take one small batched product per control step.
 """
 
@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..regressor import SlotineLiRegressor
-from ..uncertainty import LinkBox
+from ..model.regressor import SlotineLiRegressor
+from ..model.uncertainty import LinkBox
 from . import interval as ia
 from .base import ROUNDING_ABSOLUTE, ROUNDING_RELATIVE, BoundMethod, link_body_placement
 

@@ -44,8 +44,8 @@ import pinocchio as pin
 from flint import arb, ctx
 
 from ..errors import InputError, UrpcError, did_you_mean
-from ..robot import Robot
-from ..uncertainty import LinkBox, ParameterBox, physical_coordinates
+from ..model.robot import Robot
+from ..model.uncertainty import LinkBox, ParameterBox, physical_coordinates
 from .base import BoundMethod
 
 #: Working precision of the Arb balls [bits]. Inputs are doubles (exact at any precision); 64 bits

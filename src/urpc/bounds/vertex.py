@@ -49,9 +49,9 @@ import numba
 import numpy as np
 
 from ..errors import InputError
-from ..regressor import SlotineLiRegressor
-from ..robot import Robot
-from ..uncertainty import LinkBox, ParameterBox, barycentric_from_physical
+from ..model.regressor import SlotineLiRegressor
+from ..model.robot import Robot
+from ..model.uncertainty import LinkBox, ParameterBox, barycentric_from_physical
 from .base import ROUNDING_ABSOLUTE, ROUNDING_RELATIVE, BoundMethod, link_body_placement
 from .hull import barycentric_enclosure
 

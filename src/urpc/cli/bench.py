@@ -60,7 +60,7 @@ def register(commands) -> None:
 
 
 def run_bench(args) -> int:
-    from ..benchmark import (
+    from ..studies.benchmark import (
         SuiteSettings,
         format_benchmarks,
         format_machine,
@@ -78,7 +78,7 @@ def run_bench(args) -> int:
 
 
 def run_bench_bounds(args) -> int:
-    from ..benchmark import (
+    from ..studies.benchmark import (
         BENCHMARK_ROBOTS,
         SUITE_METHODS,
         bench_bounds,

@@ -8,7 +8,7 @@ from .common import EXIT_OK, non_negative_float, non_negative_int, positive_int,
 
 
 def register(commands) -> None:
-    from ..scenario import PLANT_BACKENDS
+    from ..studies.scenario import PLANT_BACKENDS
 
     p = commands.add_parser(
         "campaign",
@@ -58,8 +58,8 @@ def register(commands) -> None:
 
 
 def run_campaign_command(args) -> int:
-    from ..campaign import check_writable, run_campaign
-    from ..scenario import load_scenario
+    from ..studies.campaign import check_writable, run_campaign
+    from ..studies.scenario import load_scenario
 
     limit = args.sampled_gain_limit
     options = None if limit is None else {"interval": {"sampled_gain_limit": limit == "on"}}

@@ -101,7 +101,7 @@ def _common_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_reconfigure(args) -> int:
-    from ..demo import reconfigure_demo
+    from ..studies.demo import reconfigure_demo
 
     summary = reconfigure_demo(
         args.out,
@@ -138,7 +138,7 @@ def run_reconfigure(args) -> int:
 
 
 def run_tool_change(args) -> int:
-    from ..demo import tool_change_demo
+    from ..studies.demo import tool_change_demo
 
     summary = tool_change_demo(
         args.out,

@@ -43,7 +43,7 @@ def register(commands) -> None:
 
 
 def run_robots(args) -> int:
-    from ..catalog import builtin_robots, example_robot_data_robots
+    from ..model.catalog import builtin_robots, example_robot_data_robots
 
     builtin = builtin_robots()
     erd = example_robot_data_robots()
@@ -70,9 +70,9 @@ def run_robots(args) -> int:
 
 
 def load_robot_and_box(args):
-    from ..catalog import default_uncertainty
-    from ..robot import load_robot
-    from ..uncertainty import ParameterBox, load_uncertainty
+    from ..model.catalog import default_uncertainty
+    from ..model.robot import load_robot
+    from ..model.uncertainty import ParameterBox, load_uncertainty
 
     robot = load_robot(args.robot, locked_joints=args.lock)
     path = args.uncertainty or default_uncertainty(args.robot)

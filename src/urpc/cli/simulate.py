@@ -101,8 +101,8 @@ def register(commands) -> None:
 
 # ============================================================================== simulate
 def run_simulate(args) -> int:
-    from ..plotting import plot_error, plot_torque, plot_trajectory
-    from ..scenario import build, build_controller, simulate_setup
+    from ..sim.plotting import plot_error, plot_torque, plot_trajectory
+    from ..studies.scenario import build, build_controller, simulate_setup
 
     scenario = scenario_from_arguments(args)
     setup = build(scenario)
@@ -120,7 +120,7 @@ def run_simulate(args) -> int:
     if args.out is not None:
         import yaml
 
-        from ..results import write_files
+        from ..sim.results import write_files
 
         writers = result.writers(csv=True)
         document = yaml.safe_dump(scenario.to_dict(), sort_keys=False)
@@ -145,9 +145,9 @@ def run_simulate(args) -> int:
 
 def scenario_from_arguments(args):
     """The scenario of a ``simulate`` command line: the file (or a robot and its box) with every
-    given flag as an override (:meth:`urpc.scenario.Scenario.with_overrides`)."""
-    from ..catalog import default_uncertainty, resolve_robot
-    from ..scenario import load_scenario, parse_scenario
+    given flag as an override (:meth:`urpc.studies.scenario.Scenario.with_overrides`)."""
+    from ..model.catalog import default_uncertainty, resolve_robot
+    from ..studies.scenario import load_scenario, parse_scenario
 
     uncertainty = args.uncertainty
     if args.robot is not None and uncertainty is None:
@@ -260,7 +260,7 @@ def _show_progress(args) -> bool:
 
 # ============================================================================== reproduce-paper
 def run_reproduce_paper(args) -> int:
-    from ..paper import DEFAULT_OUT_DIR, reproduce_paper, results_markdown
+    from ..studies.paper import DEFAULT_OUT_DIR, reproduce_paper, results_markdown
 
     out = DEFAULT_OUT_DIR if args.out is None else args.out
     document = reproduce_paper(

@@ -15,8 +15,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import InputError
-from ..robot import Robot
-from ..uncertainty import ParameterBox
+from ..model.robot import Robot
+from ..model.uncertainty import ParameterBox
 from .base import Controller, Reference
 
 

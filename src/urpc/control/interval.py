@@ -22,7 +22,7 @@ over the parameter box (eq. 9), computed by a :class:`~urpc.bounds.BoundMethod` 
 
 When the bound method works on the Slotine-Li regressor, one ``Y_SL(q, qd, qd_a, qdd_a)`` per step
 gives both the nominal torque ``Y_SL pi0`` and the enclosure, since
-``M qdd_a + C qd_a + g = Y_SL pi`` (:mod:`urpc.regressor`).
+``M qdd_a + C qd_a + g = Y_SL pi`` (:mod:`urpc.model.regressor`).
 
 **Sampled-data gain limit** (optional; not in the paper). Under a zero-order hold of period ``T``
 the feedback ``v = -D r`` with ``D = kappa ||rho|| + phi`` discretizes, per eigen-mode ``i`` of the
@@ -39,7 +39,7 @@ stable while the true modal inertia exceeds ``lambda_i / 2``). Modes whose cap e
 exactly the paper's law, and ``T -> 0`` recovers it everywhere. Where the cap is active the
 continuous-time argument of Theorem 2 does not apply (it does not apply to a sampled loop anyway).
 
-Build it with :func:`urpc.synthesis.synthesize`, which validates the gains.
+Build it with :func:`urpc.control.synthesis.synthesize`, which validates the gains.
 """
 
 from __future__ import annotations

@@ -35,9 +35,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import InputError
-from ..regressor import link_regressor_map
-from ..robot import Robot
-from ..uncertainty import ParameterBox
+from ..model.regressor import link_regressor_map
+from ..model.robot import Robot
+from ..model.uncertainty import ParameterBox
 from .base import Controller, Reference
 
 

@@ -38,8 +38,8 @@ import numpy as np
 import pinocchio as pin
 import yaml
 
+from ..errors import InputError, did_you_mean
 from .catalog import builtin_root
-from .errors import InputError, did_you_mean
 from .robot import Robot, inertia_problem, load_robot
 from .uncertainty import (
     PHYSICAL_FIELDS,
@@ -148,7 +148,7 @@ class Module:
         kind: One of :data:`KINDS`.
         source: The module file.
         description: Free text.
-        inertial: Nominal physical coordinates :data:`urpc.uncertainty.PHYSICAL_FIELDS` in the
+        inertial: Nominal physical coordinates :data:`urpc.model.uncertainty.PHYSICAL_FIELDS` in the
             module frame: mass [kg], CoM [m], rotational inertia about the CoM [kg m^2].
         proximal: Input frame (``None`` for a base).
         distal: Output frame (``None`` for a payload).
@@ -505,9 +505,9 @@ class Assembly:
         return sum(part.kind == "actuator" for part in self.parts)
 
     def load(self) -> tuple[Robot, ParameterBox]:
-        """The robot model (:func:`urpc.robot.load_robot` on :attr:`urdf_path`) and its box.
+        """The robot model (:func:`urpc.model.robot.load_robot` on :attr:`urdf_path`) and its box.
 
-        The box is :attr:`uncertainty` validated by :func:`urpc.uncertainty.parse_uncertainty`,
+        The box is :attr:`uncertainty` validated by :func:`urpc.model.uncertainty.parse_uncertainty`,
         the same as ``load_uncertainty(uncertainty_path, robot)`` without parsing the YAML text
         back (8 ms of the pure-Python YAML reader saved per assembly).
         """

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InputError
+from ..errors import InputError
 from .metrics import METRIC_NAMES, compute_metrics
 
 #: File names written by :meth:`SimulationResult.save`.
@@ -106,7 +106,7 @@ class SimulationResult:
 
     @cached_property
     def metrics(self) -> dict[str, Any]:
-        """The run's metrics, keys :data:`urpc.metrics.METRIC_NAMES` (see :mod:`urpc.metrics`)."""
+        """The run's metrics, keys :data:`urpc.sim.metrics.METRIC_NAMES` (see :mod:`urpc.sim.metrics`)."""
         return compute_metrics(self)
 
     def summary(self) -> dict[str, Any]:

@@ -13,7 +13,7 @@ import importlib.resources
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import InputError, did_you_mean
+from ..errors import InputError, did_you_mean
 
 #: Short names for example-robot-data URDFs whose file stem is not the usual name.
 ALIASES = {"ur5": "ur5_robot", "ur3": "ur3_robot", "ur10": "ur10_robot"}

@@ -34,8 +34,8 @@ import numpy as np
 import pinocchio as pin
 import yaml
 
-from .errors import InputError, did_you_mean
-from .expressions import evaluate
+from ..errors import InputError, did_you_mean
+from ..expressions import evaluate
 from .robot import Robot, inertia_problem
 
 #: Physical coordinates, stored in this order: mass, CoM in the link frame, inertia about the CoM

@@ -9,10 +9,10 @@ integrates
 with classical Runge-Kutta 4 in steps of at most ``max_step`` [s]. Two backends:
 
 * :class:`PinocchioPlant`: accelerations from Pinocchio's articulated-body algorithm on the
-  :class:`~urpc.robot.Robot` (the reference plant of urpc).
+  :class:`~urpc.model.robot.Robot` (the reference plant of urpc).
 * :class:`MujocoPlant`: an independent plant. MuJoCo compiles the robot's URDF itself (its own
   parser for joint origins, axes and fixed links), then every body receives the inertia the
-  :class:`~urpc.robot.Robot` gives its URDF link, so true parameters and payloads are honored.
+  :class:`~urpc.model.robot.Robot` gives its URDF link, so true parameters and payloads are honored.
   ``mujoco`` is an optional dependency (``pip install 'urpc[mujoco]'``).
 
 Build a plant with :func:`make_plant`; ``docs/plants.md`` gives the measured agreement.
@@ -30,9 +30,9 @@ from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 import numpy as np
 import pinocchio as pin
 
-from .errors import InputError, SimulationError
-from .robot import Robot
-from .validation import finite_vector, positive_number
+from ..errors import InputError, SimulationError
+from ..model.robot import Robot
+from ..validation import finite_vector, positive_number
 
 if TYPE_CHECKING:
     import mujoco
@@ -53,7 +53,7 @@ class PlantState(NamedTuple):
 class Plant(ABC):
     """A simulated arm driven by a torque held constant over each step (zero-order hold).
 
-    Coordinates follow :class:`~urpc.robot.Robot`: ``dof`` joint angles [rad] or positions [m]
+    Coordinates follow :class:`~urpc.model.robot.Robot`: ``dof`` joint angles [rad] or positions [m]
     in Pinocchio's joint order (a continuous joint is one unbounded angle).
 
     Args:
@@ -415,7 +415,7 @@ def _mujoco_urdf(robot: Robot) -> str:
 
 def _fix_joint(joint: ElementTree.Element, value: float) -> None:
     """Turn a locked revolute or prismatic joint into a fixed one at ``value`` [rad or m]
-    (clipped into its limits, as :func:`urpc.robot.load_robot` locks it)."""
+    (clipped into its limits, as :func:`urpc.model.robot.load_robot` locks it)."""
     limit = joint.find("limit")
     if limit is not None and joint.get("type") in ("revolute", "prismatic"):
         value = min(max(value, float(limit.get("lower", "0"))), float(limit.get("upper", "0")))

@@ -17,11 +17,11 @@ and writes into ``out_dir``:
   the epsilon line, and torques, scenario 1), the error norms of scenarios 2 and 3 with both
   initial conditions, and Figs. 4-5 (both controllers' errors and torques, scenarios 2 and 3, IC2);
 * ``runs/<scenario>-<controller>/``: each run's ``result.npz`` and ``summary.json``
-  (:meth:`urpc.results.SimulationResult.save` without the CSV table).
+  (:meth:`urpc.sim.results.SimulationResult.save` without the CSV table).
 
 Each run is seeded by its scenario file, so a parallel reproduction gives the same series as a
 serial one (``tests/test_paper.py`` checks it). Nothing is written into ``out_dir`` before every run
-has finished (:func:`urpc.results.write_files`).
+has finished (:func:`urpc.sim.results.write_files`).
 """
 
 from __future__ import annotations
@@ -39,8 +39,8 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from .errors import InputError
-from .results import NPZ_NAME, SUMMARY_NAME, SimulationResult, write_files
+from ..errors import InputError
+from ..sim.results import NPZ_NAME, SUMMARY_NAME, SimulationResult, write_files
 
 #: The paper's scenarios (Table II number, initial condition) in report order.
 PAPER_RUNS = tuple((number, ic) for number in (1, 2, 3) for ic in (1, 2))
@@ -225,7 +225,7 @@ def _conditions(controller) -> dict[str, Any]:
 
 # ============================================================================== report
 def _document(runs: dict, duration: float | None, workers: int) -> dict:
-    from .control.r_alpha import PAPER_BETAS, RAlphaController
+    from ..control.r_alpha import PAPER_BETAS, RAlphaController
 
     rows = []
     for (number, ic, controller), run in runs.items():
@@ -334,7 +334,7 @@ def _yes(flag: bool) -> str:
 # ============================================================================== figures
 def _figure_writers(runs: dict) -> dict[str, Callable[[Path], None]]:
     """The figures (Fig. 1-5 and the sampled scenarios' error norms), as writers."""
-    from .plotting import compare, plot_errors, plot_overview, plot_reference
+    from ..sim.plotting import compare, plot_errors, plot_overview, plot_reference
     from .scenario import build, load_scenario
 
     def result(number: int, ic: int, controller: str) -> SimulationResult:

@@ -47,7 +47,8 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
-from .errors import InputError, SimulationError
+from ..errors import InputError, SimulationError
+from ..model.uncertainty import ParameterBox
 from .scenario import (
     Scenario,
     ScenarioSetup,
@@ -57,7 +58,6 @@ from .scenario import (
     parse_scenario,
     simulate_setup,
 )
-from .uncertainty import ParameterBox
 
 #: Columns of ``runs.csv`` that carry metrics of the run (after the draw columns).
 METRIC_COLUMNS = (
@@ -240,7 +240,7 @@ class _Task:
 
 @dataclass(frozen=True)
 class RunOutcome:
-    """One run's draws and metrics (see :mod:`urpc.metrics`); ``status`` is ``"ok"`` or
+    """One run's draws and metrics (see :mod:`urpc.sim.metrics`); ``status`` is ``"ok"`` or
     ``"diverged"`` (then ``message`` says where, and ``met`` is false). ``cpu_time`` [s] is the
     CPU time the run took on its worker thread (unlike wall time, it does not grow when other
     programs share the cores)."""

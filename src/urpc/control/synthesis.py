@@ -12,11 +12,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .bounds import default_method, make_bound
-from .control.interval import IntervalPassivityController
-from .errors import InputError
-from .robot import Robot
-from .uncertainty import ParameterBox
+from ..bounds import default_method, make_bound
+from ..errors import InputError
+from ..model.robot import Robot
+from ..model.uncertainty import ParameterBox
+from .interval import IntervalPassivityController
 
 
 def synthesize(

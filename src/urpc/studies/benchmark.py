@@ -29,12 +29,12 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .bounds import METHODS, BoundMethod, make_bound
-from .bounds.vertex import VertexBound
-from .catalog import default_uncertainty
-from .errors import InputError
-from .robot import Robot, load_robot
-from .uncertainty import LinkBox, ParameterBox, load_uncertainty, parse_uncertainty
+from ..bounds import METHODS, BoundMethod, make_bound
+from ..bounds.vertex import VertexBound
+from ..errors import InputError
+from ..model.catalog import default_uncertainty
+from ..model.robot import Robot, load_robot
+from ..model.uncertainty import LinkBox, ParameterBox, load_uncertainty, parse_uncertainty
 
 #: The robots of the figures; the Panda's fingers are locked (7 arm joints).
 BENCHMARK_ROBOTS = ("rr_planar", "ur5", "panda")
@@ -354,9 +354,9 @@ def run_benchmarks(
       the simulation alone, after synthesis).
     * ``synthesis``: wall time (median) of ``load_robot + load_uncertainty + synthesize`` per
       robot with its control scenario's settings, and of
-      :func:`urpc.demo.synthesize_configuration` (compose + load + synthesize) per assembly
+      :func:`urpc.studies.demo.synthesize_configuration` (compose + load + synthesize) per assembly
       (key ``assembly/<name>``).
-    * ``campaign_runs_per_minute``: :func:`urpc.campaign.run_campaign` on the campaign scenario
+    * ``campaign_runs_per_minute``: :func:`urpc.studies.campaign.run_campaign` on the campaign scenario
       with ``campaign_workers`` processes, ``60 runs / wall time`` (pool start-up included).
     * ``machine``: :func:`machine_info`, with ``load_average_end`` at the end.
 
@@ -580,7 +580,7 @@ def format_profile(profile: dict[str, dict[str, float]]) -> str:
 
 def simulation_speed(scenario_name: str, duration: float | None = None) -> float:
     """Simulated seconds per wall second of one run of a scenario (``duration``: overrides the
-    scenario's [s]); the wall time of :func:`urpc.scenario.simulate_setup` alone."""
+    scenario's [s]); the wall time of :func:`urpc.studies.scenario.simulate_setup` alone."""
     from .scenario import build, build_controller, load_scenario, simulate_setup
 
     scenario = load_scenario(scenario_name).with_overrides(duration=duration)
@@ -595,8 +595,8 @@ def simulation_speed(scenario_name: str, duration: float | None = None) -> float
 def synthesis_time(robot_name: str, repeats: int = 7) -> float:
     """Median wall time [s] of ``load_robot + load_uncertainty + synthesize`` with the settings
     of the robot's :data:`CONTROL_SCENARIOS` entry (after one untimed warm-up run)."""
+    from ..control.synthesis import synthesize
     from .scenario import interval_synthesis_options, load_scenario
-    from .synthesis import synthesize
 
     scenario = load_scenario(_control_scenario(robot_name))
     options = interval_synthesis_options(scenario)
@@ -625,7 +625,7 @@ def _assembly_synthesis_time(name: str, repeats: int) -> float:
 def campaign_throughput(
     scenario_name: str, runs: int, workers: int = 2, duration: float | None = None
 ) -> float:
-    """Runs per minute of :func:`urpc.campaign.run_campaign` (wall time, process start-up
+    """Runs per minute of :func:`urpc.studies.campaign.run_campaign` (wall time, process start-up
     included); ``duration`` overrides the scenario's [s]."""
     from .campaign import run_campaign
     from .scenario import load_scenario

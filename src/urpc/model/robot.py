@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from ..errors import InputError, did_you_mean
 from .catalog import resolve_robot
-from .errors import InputError, did_you_mean
 
 #: Pinocchio joint models accepted (fixed joints are merged away by the URDF parser).
 _SUPPORTED = {

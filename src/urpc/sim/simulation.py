@@ -1,6 +1,6 @@
 """Closed-loop simulation of a true plant under a controller, continuous or sampled.
 
-The plant is a :class:`~urpc.robot.Robot` carrying the *true* parameters; its accelerations come
+The plant is a :class:`~urpc.model.robot.Robot` carrying the *true* parameters; its accelerations come
 from Pinocchio's articulated-body algorithm. The plant sees ``sat(u) + d``: the controller's torque
 ``u``, clipped to the optional per-joint ``torque_limit``, plus an input disturbance ``d``.
 
@@ -11,7 +11,7 @@ from Pinocchio's articulated-body algorithm. The plant sees ``sat(u) + d``: the 
 * **Sampled** (scenarios 2, 3): at each sample ``t_k = k T`` the controller reads ``(q, qd)``,
   its output is held (zero-order hold) over ``[t_k, t_k + T)`` together with a disturbance ``d_k``
   drawn uniformly in the ball ``||d|| <= disturbance_bound`` (seeded), and a
-  :class:`~urpc.plants.Plant` of the chosen backend (``plant_backend``: ``pinocchio``, the
+  :class:`~urpc.sim.plants.Plant` of the chosen backend (``plant_backend``: ``pinocchio``, the
   reference, or the independent ``mujoco`` one) integrates the period by classical Runge-Kutta 4
   with steps of at most ``integration_step``. Under a held torque the plant alone is not stiff, so
   RK4 with ``1e-4`` s steps is accurate to far below the tracking tolerances
@@ -35,12 +35,12 @@ import numpy as np
 import pinocchio as pin
 from scipy.integrate import solve_ivp
 
-from .control.base import Controller, Reference
-from .errors import InputError, SimulationError
+from ..control.base import Controller, Reference
+from ..errors import InputError, SimulationError
+from ..model.robot import Robot
+from ..validation import finite_vector, positive_number
 from .plants import PLANTS, Plant, make_plant
 from .results import SimulationResult
-from .robot import Robot
-from .validation import finite_vector, positive_number
 
 #: Default continuous-time integrator and tolerances, chosen by measurement on the paper's
 #: scenario 1 (10 s): the interval law (Kr = 95/s, phi up to ~1.5e3) is stiff-ish, and the r-alpha
@@ -112,7 +112,7 @@ def simulate(
         progress: ``None``; ``True`` for a tqdm bar on stderr; a callable receiving the fraction
             done in ``[0, 1]``; or a tqdm-like object (``update``, ``total``), advanced by
             ``total`` times the fraction done (``total`` is set to 100 when it is ``None``).
-        plant_backend: Plant of a sampled run, a key of :data:`urpc.plants.PLANTS`
+        plant_backend: Plant of a sampled run, a key of :data:`urpc.sim.plants.PLANTS`
             (``pinocchio`` or ``mujoco``); continuous time needs ``pinocchio``.
         controller_state0: The controller's internal state at ``t = 0`` (length
             ``controller.n_states``), e.g. to continue a run after a tool change; ``None`` uses

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from .errors import InputError
+from ..errors import InputError
 from .robot import Robot
 
 

@@ -20,26 +20,26 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .catalog import builtin_root
-from .control.base import Controller
-from .errors import InputError, did_you_mean
-from .expressions import evaluate
-from .plants import PLANTS
-from .robot import Robot, inertia_problem, load_robot
-from .trajectories import (
+from ..control.base import Controller
+from ..errors import InputError, did_you_mean
+from ..expressions import evaluate
+from ..model.catalog import builtin_root
+from ..model.robot import Robot, inertia_problem, load_robot
+from ..model.uncertainty import (
+    UNITS,
+    ParameterBox,
+    load_parameter_point,
+    load_uncertainty,
+    read_yaml,
+)
+from ..sim.plants import PLANTS
+from ..sim.trajectories import (
     TRAJECTORY_KINDS,
     PaperTrajectory,
     QuinticTrajectory,
     SinusoidTrajectory,
     Trajectory,
     generic_trajectory,
-)
-from .uncertainty import (
-    UNITS,
-    ParameterBox,
-    load_parameter_point,
-    load_uncertainty,
-    read_yaml,
 )
 
 #: Controllers a scenario can run.
@@ -50,7 +50,7 @@ SCENARIO_KEYS = (
     "trajectory", "initial_condition", "sample_period", "disturbance", "epsilon", "controller",
     "controller_options", "duration", "seed", "torque_limit", "plant",
 )  # fmt: skip
-#: Plant backends a scenario can simulate with (``urpc.plants.PLANTS``).
+#: Plant backends a scenario can simulate with (``urpc.sim.plants.PLANTS``).
 PLANT_BACKENDS = tuple(PLANTS)
 #: Folder of the scenarios shipped with the source tree.
 
@@ -576,7 +576,7 @@ def _parse_torque_limit(value: Any, context: _Context) -> float | tuple[float, .
 
 
 def _interval_option_names() -> tuple[str, ...]:
-    from .synthesis import synthesize
+    from ..control.synthesis import synthesize
 
     # The sample period is the scenario's own; `sampled_gain_limit` says whether synthesis uses it.
     parameters = inspect.signature(synthesize).parameters.values()
@@ -608,7 +608,7 @@ def _parse_option(controller: str, key: str, raw: Any, context: _Context, fieldn
             raise context.error(f"{raw!r} is not true or false", fieldname)
         return raw
     if controller == "interval" and key == "method":
-        from .bounds import METHODS
+        from ..bounds import METHODS
 
         if raw is None:
             return None
@@ -874,7 +874,7 @@ def _within_limits(
 
 
 def interval_synthesis_options(scenario: Scenario) -> dict[str, Any]:
-    """The keyword arguments of :func:`urpc.synthesis.synthesize` for the scenario's ``interval``
+    """The keyword arguments of :func:`urpc.control.synthesis.synthesize` for the scenario's ``interval``
     options: sampled runs pass their ``sample_period`` (each inertia mode's gain capped at its
     dead-beat value) unless the scenario asks for the paper's law unchanged
     (``sampled_gain_limit: false``)."""
@@ -888,7 +888,7 @@ def build_controller(setup: ScenarioSetup, controller: str | None = None) -> Con
     """Synthesize the scenario's controller (or ``controller``, one of :data:`CONTROLLERS`) with
     its options from the scenario.
 
-    ``interval`` options: the keyword arguments of :func:`urpc.synthesis.synthesize`, and
+    ``interval`` options: the keyword arguments of :func:`urpc.control.synthesis.synthesize`, and
     ``sampled_gain_limit`` (default true): in a sampled scenario, synthesize with the scenario's
     sample period, which caps each inertia mode's gain at its dead-beat value (see
     :mod:`urpc.control.interval`); ``false`` runs the paper's law unchanged.
@@ -908,15 +908,15 @@ def build_controller(setup: ScenarioSetup, controller: str | None = None) -> Con
     options = dict(scenario.controller_options[name])
     try:
         if name == "interval":
-            from .synthesis import synthesize
+            from ..control.synthesis import synthesize
 
             options = interval_synthesis_options(scenario)
             return synthesize(setup.robot, setup.box, scenario.epsilon, **options)
         if name == "computed-torque":
-            from .control.computed_torque import synthesize_computed_torque
+            from ..control.computed_torque import synthesize_computed_torque
 
             return synthesize_computed_torque(setup.robot, setup.box, **options)
-        from .control.r_alpha import PAPER_BETAS, Betas, synthesize_r_alpha
+        from ..control.r_alpha import PAPER_BETAS, Betas, synthesize_r_alpha
 
         betas = options.pop("betas", "estimate")
         if betas == "paper":
@@ -936,10 +936,10 @@ def build_controller(setup: ScenarioSetup, controller: str | None = None) -> Con
 
 def run_scenario(
     scenario: Scenario, controller: str | None = None, progress: Any = None
-):  # -> urpc.results.SimulationResult
+):  # -> urpc.sim.results.SimulationResult
     """Build, synthesize and simulate one scenario; returns the simulation result.
 
-    ``progress`` is passed to :func:`urpc.simulation.simulate`. The result's ``info`` records the
+    ``progress`` is passed to :func:`urpc.sim.simulation.simulate`. The result's ``info`` records the
     plant backend (``plant``) and how the true parameters were chosen (``true_parameters``).
     """
     setup = build(scenario)
@@ -949,10 +949,10 @@ def run_scenario(
 
 def simulate_setup(
     setup: ScenarioSetup, controller: Controller, progress: Any = None
-):  # -> urpc.results.SimulationResult
+):  # -> urpc.sim.results.SimulationResult
     """Simulate a built scenario with a synthesized controller (the last step of
     :func:`run_scenario`, for callers that want to inspect the setup or the controller)."""
-    from .simulation import simulate
+    from ..sim.simulation import simulate
 
     scenario = setup.scenario
     result = simulate(

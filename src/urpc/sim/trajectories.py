@@ -21,9 +21,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .control.base import Reference
-from .errors import InputError
-from .robot import Robot
+from ..control.base import Reference
+from ..errors import InputError
+from ..model.robot import Robot
 
 
 class Trajectory(ABC):

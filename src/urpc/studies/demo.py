@@ -5,7 +5,7 @@ Two demonstrations of the paper's closing promise (automatic synthesis for modul
 * :func:`reconfigure_demo` runs a sequence of arm configurations (default: the shipped assemblies
   ``arm_3dof``, ``arm_4dof``, ``arm_4dof_vacuum``) as if the arm were reassembled between runs.
   Each one is composed from its modules, loaded and given a controller with the same default
-  settings (:func:`urpc.synthesis.synthesize` with ``epsilon`` only), then simulated sampled at
+  settings (:func:`urpc.control.synthesis.synthesize` with ``epsilon`` only), then simulated sampled at
   1 kHz on a true plant drawn from its box, under an input disturbance the controller does not
   know. Its ``synthesis_time`` [s] is URDF composition + model load + controller construction.
 * :func:`tool_change_run` changes the payload during a run: at ``t_change`` the true plant takes a
@@ -37,16 +37,16 @@ import pinocchio as pin
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .control.base import Controller, Reference
-from .errors import InputError, SimulationError
-from .modular import TCP_LINK, Assembly, assemble, load_assembly, load_module_library
-from .results import SimulationResult
-from .robot import Robot
+from ..control.base import Controller, Reference
+from ..control.synthesis import synthesize
+from ..errors import InputError, SimulationError
+from ..model.modular import TCP_LINK, Assembly, assemble, load_assembly, load_module_library
+from ..model.robot import Robot
+from ..model.uncertainty import ParameterBox
+from ..sim.results import SimulationResult
+from ..sim.simulation import simulate
+from ..sim.trajectories import Trajectory, generic_trajectory, home_configuration
 from .scenario import sample_true_parameters
-from .simulation import simulate
-from .synthesis import synthesize
-from .trajectories import Trajectory, generic_trajectory, home_configuration
-from .uncertainty import ParameterBox
 
 #: The shipped assemblies the reconfiguration demo runs, in order.
 DEFAULT_CONFIGURATIONS = ("arm_3dof", "arm_4dof", "arm_4dof_vacuum")
@@ -75,9 +75,9 @@ class SynthesisTiming:
     """Wall times [s] of building one configuration's controller (medians over ``repeats``).
 
     Attributes:
-        compose: Module chain -> URDF and uncertainty files (:func:`urpc.modular.assemble`).
+        compose: Module chain -> URDF and uncertainty files (:func:`urpc.model.modular.assemble`).
         load: URDF -> Pinocchio model and validated box (:meth:`Assembly.load`).
-        controller: Robot and box -> controller (:func:`urpc.synthesis.synthesize`).
+        controller: Robot and box -> controller (:func:`urpc.control.synthesis.synthesize`).
         total: Median of ``compose + load + controller`` (the ``synthesis_time``).
         total_min: Fastest of the repeats.
         repeats: Number of timed repeats.
@@ -147,7 +147,7 @@ def synthesize_configuration(
             sampled-data gain limit); ``None`` for continuous time.
 
     Raises:
-        InputError: an invalid configuration (see :func:`urpc.modular.assemble`).
+        InputError: an invalid configuration (see :func:`urpc.model.modular.assemble`).
     """
     if not (isinstance(repeats, int) and repeats >= 1):
         raise InputError(f"{repeats!r} must be an integer >= 1", field="repeats")
@@ -234,7 +234,7 @@ class ConfigurationRun:
         arm: The synthesized configuration (assembly, models, controller, timing).
         plant: The true plant (a seeded, physically consistent draw from the box).
         true_point: The drawn parameters (link or payload -> coordinates of its box).
-        trajectory: The desired trajectory (:func:`urpc.trajectories.generic_trajectory`).
+        trajectory: The desired trajectory (:func:`urpc.sim.trajectories.generic_trajectory`).
         result: The simulation, or ``None`` when it diverged.
         failure: Why the simulation stopped, when it diverged.
     """
@@ -292,7 +292,7 @@ def run_configuration(
     """Synthesize one configuration on the fly (default settings) and simulate it.
 
     The true plant is a seeded uniform draw from the configuration's box, redrawn until every body
-    is physical (:func:`urpc.scenario.sample_true_parameters`); the trajectory is the generic
+    is physical (:func:`urpc.studies.scenario.sample_true_parameters`); the trajectory is the generic
     sinusoid of the nominal model, starting at rest on the reference (or ``initial_offset`` [rad],
     a number or one per joint, away from it); the control is sampled with period
     ``sample_period`` [s] (zero-order hold; ``None``: continuous time, no disturbance) and the
@@ -944,7 +944,7 @@ def _describe_point(point: Mapping[str, np.ndarray]) -> str:
 
 
 def _write_json(path: Path, payload: Mapping[str, Any]) -> None:
-    from .cli.common import jsonable
+    from ..cli.common import jsonable
 
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(f".{path.name}.partial")
