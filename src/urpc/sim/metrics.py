@@ -32,12 +32,9 @@ output grid of a continuous one), ``T = t_K - t_0`` and ``e_k = q_d(t_k) - q(t_k
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from .results import SimulationResult
 
 #: The metric names, in report order (also the keys of ``SimulationResult.metrics``).
 METRIC_NAMES = (
@@ -53,20 +50,6 @@ METRIC_NAMES = (
     "step_time_median",
     "wall_time",
 )
-
-
-def compute_metrics(result: SimulationResult) -> dict[str, Any]:
-    """The metrics of a run (keys :data:`METRIC_NAMES`; see the module docstring)."""
-    return series_metrics(
-        result.t,
-        result.error_norm,
-        result.torque,
-        result.epsilon,
-        phi=result.phi,
-        kappa=result.kappa,
-        step_time_median=result.step_time_median,
-        wall_time=result.wall_time,
-    )
 
 
 def series_metrics(

@@ -11,26 +11,49 @@ headless (no display, no global figure registry); save it with ``figure.savefig(
 * :func:`plot_errors` - error norms of several runs overlaid, with ``epsilon`` (e.g. both
   initial conditions of one scenario);
 * :func:`compare` - error norms and torques of several runs overlaid (Figs. 4, 5).
+
+A run is anything with the attributes of :class:`Run` (a :class:`urpc.sim.results.SimulationResult`
+is one), so that this module depends on no result class and the result class can plot itself.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-
-if TYPE_CHECKING:
-    from .results import SimulationResult
 
 _JOINT_STYLES = ("-", "--", "-.", ":")
 _FLOOR = 1e-12  # [rad] floor of log-scale error plots (an exact zero has no logarithm)
 _DECADES_BELOW_EPSILON = 1e-6  # error plots show at most 6 decades below epsilon
 
 
-def describe(result: SimulationResult) -> str:
+class Run(Protocol):
+    """What a figure reads of a run (see :class:`urpc.sim.results.SimulationResult`)."""
+
+    t: np.ndarray  # [s], (K,)
+    q: np.ndarray  # [rad], (K, n)
+    q_desired: np.ndarray  # [rad], (K, n)
+    torque: np.ndarray  # [N m], (K, n)
+    controller: str
+    epsilon: float  # [rad]
+    sample_period: float | None  # [s], None for continuous time
+    scenario: str
+    disturbance_bound: float  # [N m]
+
+    @property
+    def dof(self) -> int: ...
+
+    @property
+    def error_norm(self) -> np.ndarray: ...  # [rad], (K,)
+
+    @property
+    def metrics(self) -> dict[str, Any]: ...
+
+
+def describe(result: Run) -> str:
     """``scenario, controller, sampling`` as a title fragment."""
     timing = (
         "continuous time"
@@ -44,7 +67,7 @@ def describe(result: SimulationResult) -> str:
     return ", ".join(parts)
 
 
-def plot_trajectory(result: SimulationResult, *, actual: bool = True) -> Figure:
+def plot_trajectory(result: Run, *, actual: bool = True) -> Figure:
     """Desired joint positions ``q_d(t)`` [rad] (the paper's Fig. 1), and the actual ``q(t)``
     dashed when ``actual``."""
     figure = Figure(figsize=(7.0, 3.6), layout="constrained")
@@ -80,7 +103,7 @@ def plot_reference(
     return figure
 
 
-def plot_error(result: SimulationResult) -> Figure:
+def plot_error(result: Run) -> Figure:
     """``||e(t)||`` [rad] on a log scale with the required precision ``epsilon`` and the entry
     time (Figs. 2, 3)."""
     figure = Figure(figsize=(7.0, 3.6), layout="constrained")
@@ -90,7 +113,7 @@ def plot_error(result: SimulationResult) -> Figure:
     return figure
 
 
-def plot_torque(result: SimulationResult) -> Figure:
+def plot_torque(result: Run) -> Figure:
     """Commanded joint torques ``u(t)`` [N m] (Figs. 2-5)."""
     figure = Figure(figsize=(7.0, 3.6), layout="constrained")
     axes = figure.add_subplot()
@@ -100,7 +123,7 @@ def plot_torque(result: SimulationResult) -> Figure:
     return figure
 
 
-def plot_overview(result: SimulationResult) -> Figure:
+def plot_overview(result: Run) -> Figure:
     """Error norm (log scale, with ``epsilon``) above the commanded torques, like the paper's
     Figs. 2 and 3."""
     figure = Figure(figsize=(7.0, 6.0), layout="constrained")
@@ -114,7 +137,7 @@ def plot_overview(result: SimulationResult) -> Figure:
 
 
 def plot_errors(
-    results: Sequence[SimulationResult],
+    results: Sequence[Run],
     *,
     labels: Sequence[str] | None = None,
     title: str | None = None,
@@ -140,7 +163,7 @@ def plot_errors(
 
 
 def compare(
-    results: Sequence[SimulationResult],
+    results: Sequence[Run],
     *,
     labels: Sequence[str] | None = None,
     title: str | None = None,
@@ -185,7 +208,7 @@ def compare(
     return figure
 
 
-def _error_axes(axes: Axes, results: Sequence[SimulationResult], labels: Sequence[str]) -> None:
+def _error_axes(axes: Axes, results: Sequence[Run], labels: Sequence[str]) -> None:
     epsilons = set()
     smallest = np.inf
     for result, label in zip(results, labels, strict=True):
@@ -210,7 +233,7 @@ def _error_axes(axes: Axes, results: Sequence[SimulationResult], labels: Sequenc
     axes.legend(fontsize="small")
 
 
-def _torque_axes(axes: Axes, result: SimulationResult, label_prefix: str) -> None:
+def _torque_axes(axes: Axes, result: Run, label_prefix: str) -> None:
     for i in range(result.dof):
         axes.plot(
             result.t,

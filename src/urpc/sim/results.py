@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .metrics import METRIC_NAMES, compute_metrics
+from .metrics import METRIC_NAMES, series_metrics
 
 #: File names written by :meth:`SimulationResult.save`.
 NPZ_NAME, CSV_NAME, SUMMARY_NAME = "result.npz", "result.csv", "summary.json"
@@ -107,7 +107,16 @@ class SimulationResult:
     @cached_property
     def metrics(self) -> dict[str, Any]:
         """The run's metrics, keys :data:`urpc.sim.metrics.METRIC_NAMES` (see :mod:`urpc.sim.metrics`)."""
-        return compute_metrics(self)
+        return series_metrics(
+            self.t,
+            self.error_norm,
+            self.torque,
+            self.epsilon,
+            phi=self.phi,
+            kappa=self.kappa,
+            step_time_median=self.step_time_median,
+            wall_time=self.wall_time,
+        )
 
     def summary(self) -> dict[str, Any]:
         """The metrics plus ``epsilon`` and ``controller`` (the content of ``summary.json``)."""
@@ -226,7 +235,7 @@ class SimulationResult:
         """Figures of this run: ``trajectory`` (desired and actual joint positions), ``error``
         (``||e||`` on a log scale with the epsilon line) and ``torque`` (commanded torques), as
         :class:`matplotlib.figure.Figure` objects (headless; save them with ``savefig``)."""
-        from .plotting import plot_error, plot_torque, plot_trajectory
+        from .plotting import plot_error, plot_torque, plot_trajectory  # loads matplotlib
 
         return {
             "trajectory": plot_trajectory(self),
