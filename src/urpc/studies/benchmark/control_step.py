@@ -1,0 +1,182 @@
+"""The control step: each robot's controller at a fixed state, and where one step's time goes."""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from ...errors import InputError
+from .robots import BENCHMARK_ROBOTS
+from .timing import time_calls
+
+#: The scenario whose controller, box and settings each robot's control step and synthesis use:
+#: the robot's 1 kHz scenario (sampled-data gain limit on); for the RR arm, scenario 3 (the paper's
+#: law unchanged).
+CONTROL_SCENARIOS = {
+    "rr_planar": "rr_planar/s3_ic1",
+    "ur5": "ur5/sampled",
+    "panda": "panda/sampled",
+}
+
+
+def control_setup(robot_name: str):
+    """The scenario setup and the synthesized controller of ``robot_name``'s
+    :data:`CONTROL_SCENARIOS` entry, and a fixed state ``(t, q, qd, reference, state)`` on its
+    trajectory: ``t = 1.3`` s, ``q = q_d + e`` with ``||e|| = 2 epsilon`` (alternating signs),
+    ``qd = qd_d``, the gain integral ``s = 0.05`` rad s (Theorem 2).
+
+    Raises:
+        InputError: a robot without an entry (the message lists them).
+    """
+    from ..scenario import build, build_controller, load_scenario
+
+    setup = build(load_scenario(control_scenario(robot_name)))
+    controller = build_controller(setup, "interval")
+    t = 1.3
+    reference = setup.trajectory.reference(t)
+    dof = setup.robot.dof
+    signs = np.where(np.arange(dof) % 2 == 0, 1.0, -1.0)
+    q = reference.q + 2.0 * setup.scenario.epsilon * signs / np.sqrt(dof)
+    qd = reference.qd.copy()
+    state = controller.initial_state() + 0.05
+    return setup, controller, (t, q, qd, reference, state)
+
+
+def control_scenario(robot_name: str) -> str:
+    """The :data:`CONTROL_SCENARIOS` entry of a robot.
+
+    Raises:
+        InputError: a robot without an entry (the message lists them).
+    """
+    if robot_name not in CONTROL_SCENARIOS:
+        valid = ", ".join(CONTROL_SCENARIOS)
+        raise InputError(
+            f"no control scenario for robot '{robot_name}'; valid: {valid}", field="robot"
+        )
+    return CONTROL_SCENARIOS[robot_name]
+
+
+def control_step_call(robot_name: str) -> Callable[[], object]:
+    _, controller, args = control_setup(robot_name)
+    return lambda: controller.output(*args)
+
+
+def profile_control_step(
+    robots: Sequence[str] = BENCHMARK_ROBOTS, repeats: int = 101
+) -> dict[str, dict[str, float]]:
+    """Where one control step's time goes, per robot [s per call], timed side by side.
+
+    Parts of :meth:`IntervalPassivityController.output` (with the default, regressor-based
+    method): ``regressor`` (``Y_SL``, the Pinocchio regressor calls), ``bound`` (the enclosure
+    from ``Y_SL``), ``nominal`` (``Y_SL pi0``), ``gain_limit`` (``M0(q)`` by CRBA, its ``eigh``
+    and the modal product; only with the sampled-data gain limit), of which ``inertia``
+    (:meth:`Robot.M`: CRBA and symmetrization), ``crba`` (the bare Pinocchio call) and ``eigh``
+    alone; ``arithmetic`` (a replica of the array arithmetic of ``output`` around those calls:
+    ``e``, ``qd_a``, ``qdd_a``, ``r``, ``rho``, its norm, the gain, the sum); ``other`` =
+    ``output`` minus the parts (call overhead, and what the parts lose when they run together
+    rather than alone); ``output_without_gain_limit`` (the same step with the paper's law, so
+    that the difference is the gain limit's cost inside the step); and ``rnea`` for scale.
+    """
+    return {robot_name: _profile_robot(robot_name, repeats) for robot_name in robots}
+
+
+def _profile_robot(robot_name: str, repeats: int) -> dict[str, float]:
+    _, controller, args = control_setup(robot_name)
+    t, q, qd, reference, state = args
+    bound, robot = controller.bound, controller.robot
+    if not bound.uses_regressor:
+        raise InputError(
+            f"the {bound.name} method has no regressor path to profile", field="method"
+        )
+    e, ed = reference.q - q, reference.qd - qd
+    qd_a, qdd_a = reference.qd + controller.Kr * e, reference.qdd + controller.Kr * ed
+    r = ed + controller.Kr * e
+    Y = bound.regressor(q, qd, qd_a, qdd_a)
+    pi0 = np.asarray(robot.nominal_parameters, dtype=float)
+    lower, upper = bound.enclose_regressor(Y)
+    nominal = Y @ pi0
+    Kr = controller.Kr
+    kappa_P, kappa_I, phi_P, phi_I = (
+        controller.kappa_P,
+        controller.kappa_I,
+        controller.phi_P,
+        controller.phi_I,
+    )
+
+    def arithmetic():
+        # A replica of output()'s own array arithmetic around the calls timed separately.
+        e = reference.q - q
+        ed = reference.qd - qd
+        Kr_e = Kr * e
+        _ = reference.qd + Kr_e, reference.qdd + Kr * ed
+        r = ed + Kr_e
+        rho = np.maximum(-lower, upper)
+        rho_norm = math.sqrt(rho @ rho)
+        s = state[0]
+        gain = (kappa_P + kappa_I * s) * rho_norm + phi_P + phi_I * s
+        return nominal + gain * r
+
+    data = robot.model.createData()
+    config = robot.configuration(q)
+    M = robot.M(q)
+    functions: dict[str, Callable[[], object]] = {
+        "output": lambda: controller.output(*args),
+        "regressor": lambda: bound.regressor(q, qd, qd_a, qdd_a),
+        "bound": lambda: bound.enclose_regressor(Y),
+        "nominal": lambda: Y @ pi0,
+        "arithmetic": arithmetic,
+        "rnea": lambda: pin.rnea(robot.model, data, config, qd, qdd_a),
+    }
+    if controller.sample_period is not None:
+        # The private method is exactly what output() runs for the gain limit.
+        functions["gain_limit"] = lambda: controller._sampled_feedback(q, 1e3, r)
+        unlimited = copy.copy(controller)  # shares the bound method; only the period differs
+        unlimited.sample_period = None
+        functions["output_without_gain_limit"] = lambda: unlimited.output(*args)
+        functions["inertia"] = lambda: robot.M(q)
+        functions["crba"] = lambda: pin.crba(robot.model, data, config)
+        functions["eigh"] = lambda: np.linalg.eigh(M)
+    times = time_calls(functions, repeats)
+    parts = ("regressor", "bound", "nominal", "arithmetic", "gain_limit")
+    times["other"] = times["output"] - sum(times.get(name, 0.0) for name in parts)
+    return times
+
+
+#: Columns of :func:`format_profile`: key, heading.
+PROFILE_COLUMNS = (
+    ("output", "control step"),
+    ("output_without_gain_limit", "step without gain limit"),
+    ("regressor", "regressor Y_SL"),
+    ("bound", "bound from Y_SL"),
+    ("nominal", "nominal Y_SL pi0"),
+    ("arithmetic", "array arithmetic"),
+    ("gain_limit", "gain limit"),
+    ("inertia", "of which M0(q)"),
+    ("crba", "of which bare crba"),
+    ("eigh", "of which eigh"),
+    ("other", "other"),
+    ("rnea", "RNEA"),
+)
+
+
+def format_profile(profile: dict[str, dict[str, float]]) -> str:
+    """A Markdown table of :func:`profile_control_step`: microseconds and share of the step."""
+    lines = [
+        "| robot | " + " | ".join(f"{heading} [us]" for _, heading in PROFILE_COLUMNS) + " |",
+        "|---" * (1 + len(PROFILE_COLUMNS)) + "|",
+    ]
+    for robot, times in profile.items():
+        cells = []
+        for key, _ in PROFILE_COLUMNS:
+            if key not in times:
+                cells.append("-")
+            elif key in ("output", "output_without_gain_limit", "rnea"):
+                cells.append(f"{1e6 * times[key]:.1f}")
+            else:
+                cells.append(f"{1e6 * times[key]:.1f} ({100 * times[key] / times['output']:.0f} %)")
+        lines.append(f"| {robot} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
