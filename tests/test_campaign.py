@@ -17,7 +17,7 @@ from urpc.studies.campaign import (
     RUNS_NAME,
     SUMMARY_NAME,
     RunSpec,
-    _Task,
+    RunTask,
     draw_runs,
     physically_consistent,
     run_campaign,
@@ -188,7 +188,7 @@ def test_a_run_with_the_scenarios_own_draws_reproduces_run_scenario(short):
         q0=tuple(setup.q0),
         qd0=tuple(setup.qd0),
     )
-    outcome = run_one(_Task(json.dumps(short.to_dict(), sort_keys=True), str(short.source), spec))
+    outcome = run_one(RunTask(json.dumps(short.to_dict(), sort_keys=True), str(short.source), spec))
     expected = run_scenario(short).metrics
     assert outcome.status == "ok" and outcome.cpu_time > 0
     for name in ("met", "entry_time", "final_error", "torque_peak", "torque_variation", "phi"):

@@ -17,12 +17,7 @@ from ...errors import InputError
 from ...model.modular import Assembly, assemble, load_assembly, load_module_library
 from ...model.robot import Robot
 from ...model.uncertainty import ParameterBox
-from .settings import (
-    EPSILON,
-    SAMPLE_PERIOD,
-    TIMING_REPEATS,
-    ConfigurationLike,
-)
+from .settings import EPSILON, SAMPLE_PERIOD, TIMING_REPEATS, ConfigurationLike
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,176 @@
+"""What each run of a campaign draws: its true parameters (a vertex of the box or a uniform draw,
+physically consistent), its disturbance seed and its initial state, from ``(seed, run index)``
+alone (rules in :mod:`urpc.studies.campaign`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+import pinocchio as pin
+
+from ...errors import InputError
+from ...model.uncertainty import ParameterBox
+from ..scenario import ScenarioSetup
+
+#: Uniform draws tried per run before the box is declared (almost) nowhere physical.
+MAX_DRAWS = 1000
+#: Relative tolerance on the smallest pseudo-inertia eigenvalue (vertices sit on the boundary).
+PSEUDO_INERTIA_TOLERANCE = 1e-12
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """What run ``index`` of a campaign draws (units in brackets).
+
+    Attributes:
+        index: Run index, ``0 .. runs - 1``.
+        kind: ``"vertex"`` or ``"uniform"``.
+        vertex: Vertex index (bit ``k`` picks the upper end of uncertain coordinate ``k``, as in
+            :meth:`ParameterBox.vertex`), ``None`` for a uniform draw.
+        seed: Seed of the run's disturbance sequence.
+        point: True parameters, link or payload name -> its 10 box coordinates.
+        q0: Initial joint positions [rad]; ``qd0``: velocities [rad/s].
+        rejected: Physically inconsistent draws rejected before this one.
+    """
+
+    index: int
+    kind: Literal["vertex", "uniform"]
+    vertex: int | None
+    seed: int
+    point: Mapping[str, tuple[float, ...]]
+    q0: tuple[float, ...]
+    qd0: tuple[float, ...]
+    rejected: int = 0
+
+
+def physically_consistent(box: ParameterBox, point: Mapping[str, Any]) -> bool:
+    """Whether every link point of ``point`` is a realizable rigid body: its pseudo-inertia
+    matrix (Pinocchio's ``PseudoInertia``) is positive semi-definite, and a massless point
+    carries no first or second moment either."""
+    for name, values in point.items():
+        parameters = box.link_box(name).standard_parameters(np.asarray(values, dtype=float))
+        if not np.all(np.isfinite(parameters)):
+            return False
+        pseudo = pin.PseudoInertia.FromDynamicParameters(parameters).toMatrix()
+        eigenvalues = np.linalg.eigvalsh(pseudo)
+        scale = max(1.0, float(np.abs(eigenvalues).max()))
+        if eigenvalues[0] < -PSEUDO_INERTIA_TOLERANCE * scale:
+            return False
+        if parameters[0] <= 0 and np.abs(pseudo).max() > PSEUDO_INERTIA_TOLERANCE * scale:
+            return False
+    return True
+
+
+def draw_runs(
+    setup: ScenarioSetup,
+    runs: int,
+    seed: int = 0,
+    *,
+    ic_spread: float = 2.0,
+    vertex_runs: int | None = None,
+) -> tuple[tuple[RunSpec, ...], dict[str, Any]]:
+    """The draws of a campaign (see the module docstring for the rules).
+
+    Args:
+        setup: The built scenario (its box, ``q0``, ``qd0`` and ``epsilon`` are used).
+        runs: Number of runs, >= 1.
+        seed: Campaign seed, >= 0.
+        ic_spread: Half-width of the initial-offset box, in units of ``epsilon``.
+        vertex_runs: Number of vertex runs; ``None``: every vertex when ``2 ** n_uncertain <=
+            runs``, else ``runs // 2`` random distinct vertices.
+
+    Returns:
+        The run specifications, and statistics: ``vertices`` (vertex runs), ``vertex_total``
+        (``2 ** n_uncertain``), ``rejected_draws``, ``rejected_vertices``.
+
+    Raises:
+        InputError: bad counts, or no physically consistent point in :data:`MAX_DRAWS` draws.
+    """
+    box = setup.box
+    runs = checked_count("runs", runs, 1)
+    seed = checked_count("seed", seed, 0)
+    if not (math.isfinite(ic_spread) and ic_spread >= 0):
+        raise InputError(f"{ic_spread!r} must be a finite number >= 0 [epsilon]", field="ic_spread")
+    total = 2**box.n_uncertain
+    run_sequence, selection_sequence = np.random.SeedSequence(seed).spawn(2)
+    if vertex_runs is None:
+        vertex_runs = total if total <= runs else runs // 2
+    vertex_runs = min(checked_count("vertex_runs", vertex_runs, 0), runs, total)
+    if vertex_runs == total:
+        candidates = iter(range(total))
+    else:
+        candidates = _random_vertices(box.n_uncertain, np.random.default_rng(selection_sequence))
+    epsilon = setup.scenario.epsilon
+    specs: list[RunSpec] = []
+    rejected_vertices = 0
+    for index, run_seed in enumerate(run_sequence.spawn(runs)):
+        parameters_seed, disturbance_seed = run_seed.spawn(2)
+        rng = np.random.default_rng(parameters_seed)
+        kind, vertex, point, rejected = "uniform", None, None, 0
+        if index < vertex_runs:
+            for candidate in candidates:
+                if physically_consistent(box, box.vertex(candidate)):
+                    kind, vertex, point = "vertex", candidate, box.vertex(candidate)
+                    break
+                rejected_vertices += 1
+                if vertex_runs == total:
+                    break  # every vertex has its slot: an inconsistent one becomes uniform
+        if point is None:
+            point, rejected = _consistent_draw(box, rng)
+        offset = rng.uniform(-ic_spread * epsilon, ic_spread * epsilon, size=setup.q0.shape)
+        specs.append(
+            RunSpec(
+                index=index,
+                kind=kind,  # type: ignore[arg-type]
+                vertex=vertex,
+                seed=int(disturbance_seed.generate_state(1, np.uint64)[0]),
+                point={name: tuple(float(v) for v in values) for name, values in point.items()},
+                q0=tuple(float(v) for v in setup.q0 + offset),
+                qd0=tuple(float(v) for v in setup.qd0),
+                rejected=rejected,
+            )
+        )
+    stats = {
+        "vertices": sum(spec.kind == "vertex" for spec in specs),
+        "vertex_total": total,
+        "rejected_draws": sum(spec.rejected for spec in specs),
+        "rejected_vertices": rejected_vertices,
+    }
+    return tuple(specs), stats
+
+
+def _random_vertices(n_uncertain: int, rng: np.random.Generator):
+    """Distinct random vertex indices (bits drawn one per uncertain coordinate)."""
+    seen: set[int] = set()
+    while len(seen) < 2**n_uncertain:
+        bits = rng.integers(0, 2, size=n_uncertain)
+        index = sum(int(b) << k for k, b in enumerate(bits))
+        if index not in seen:
+            seen.add(index)
+            yield index
+
+
+def _consistent_draw(
+    box: ParameterBox, rng: np.random.Generator
+) -> tuple[dict[str, np.ndarray], int]:
+    for rejected in range(MAX_DRAWS):
+        point = box.sample(rng)
+        if physically_consistent(box, point):
+            return point, rejected
+    raise InputError(
+        f"no physically consistent point in {MAX_DRAWS} uniform draws from the box (pseudo-inertia "
+        "not positive semi-definite): tighten the inertia intervals so that the triangle "
+        "inequality holds",
+        source=box.source,
+        field="links",
+    )
+
+
+def checked_count(name: str, value: Any, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+        raise InputError(f"{value!r} must be an integer >= {minimum}", field=name)
+    return int(value)
