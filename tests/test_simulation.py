@@ -18,7 +18,8 @@ from urpc.control.base import Controller, Reference
 from urpc.control.synthesis import synthesize
 from urpc.errors import InputError, SimulationError
 from urpc.sim.metrics import METRIC_NAMES
-from urpc.sim.simulation import CONTINUOUS_METHOD, ball_samples, simulate
+from urpc.sim.sampled import ball_samples
+from urpc.sim.simulation import CONTINUOUS_METHOD, simulate
 
 TRUE = dict(m2=10.0, lc2=0.525, I2=20 / 12)
 

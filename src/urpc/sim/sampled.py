@@ -1,0 +1,115 @@
+"""The sampled closed loop: the controller's output held (zero-order hold) over each period with a
+disturbance drawn in a ball, the plant integrated by RK4 over the period."""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from ..errors import SimulationError
+from .closed_loop import RunSetup, diverged
+from .plants import Plant
+
+
+def run_sampled(
+    setup: RunSetup, stepper: Plant, period: float, disturbance_bound: float, seed: int
+) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """The series (keyword arguments of :class:`~urpc.sim.results.SimulationResult`) and the
+    ``info`` of a run sampled with period ``period`` [s] on ``stepper``."""
+    controller, trajectory = setup.controller, setup.trajectory
+    q, qd, limit, bar = setup.q0, setup.qd0, setup.limit, setup.bar
+    n = stepper.dof
+    n_periods = max(1, math.ceil(setup.duration / period - 1e-9))
+    samples = n_periods + 1
+    disturbance = ball_samples(samples, n, disturbance_bound, np.random.default_rng(seed))
+    stepper.reset(q, qd)
+
+    rate = 1.0 / period
+    if abs(rate - round(rate)) < 1e-9 * rate:  # k / rate is the exact decimal time: 0.0411 s
+        t_series = np.arange(samples) / round(rate)
+    else:
+        t_series = np.arange(samples) * period
+    q_series, qd_series = np.empty((samples, n)), np.empty((samples, n))
+    qdes_series, qddes_series = np.empty((samples, n)), np.empty((samples, n))
+    torque = np.empty((samples, n))
+    phi, kappa = np.full(samples, np.nan), np.full(samples, np.nan)
+    saturated = np.zeros(samples, dtype=bool)
+    step_times = np.empty(samples)
+    state = setup.state0
+    has_gains = bool(controller.diagnostics(state))
+    gains_of, gains = None, (np.nan, np.nan)
+    report_every = max(1, samples // 200)
+    bound = setup.max_state**2
+    clock = time.perf_counter
+    for k in range(samples):
+        t = t_series[k]
+        reference = trajectory.reference(t)
+        tic = clock()
+        u = controller.output(t, q, qd, reference, state)
+        next_state = controller.advance(t, q, qd, reference, state, period)
+        step_times[k] = clock() - tic
+        q_series[k], qd_series[k] = q, qd
+        qdes_series[k], qddes_series[k] = reference.q, reference.qd
+        torque[k] = u
+        if has_gains:
+            if state is not gains_of:  # advance() returns the same array while nothing changes
+                named = controller.diagnostics(state)
+                gains_of, gains = state, (named.get("phi", np.nan), named.get("kappa", np.nan))
+            phi[k], kappa[k] = gains
+        if k == n_periods:
+            break
+        if limit is not None:
+            clipped = np.clip(u, -limit, limit)
+            saturated[k] = np.any(clipped != u)
+            u = clipped
+        if not u @ u < math.inf:  # NaN or overflow; the plant refuses non-finite torques
+            diverged(t, q, qd, "non-finite or overflowing torque")
+        try:
+            q, qd = stepper.step(u + disturbance[k], period)
+        except SimulationError:
+            diverged(t, q, qd, "the state became non-finite during the following period")
+        # One dot product catches runaway (and NaN, should the plant let one through).
+        if not q @ q + qd @ qd <= bound:
+            diverged(t + period, q, qd, f"non-finite or ||(q, qd)|| above {setup.max_state:g}")
+        state = next_state
+        if k % report_every == 0:
+            bar.update((k + 1) / samples)
+    if limit is not None:
+        saturated[-1] = np.any(np.abs(torque[-1]) > limit)
+    bar.update(1.0)
+    series = dict(
+        t=t_series,
+        q=q_series,
+        qd=qd_series,
+        q_desired=qdes_series,
+        qd_desired=qddes_series,
+        torque=torque,
+        disturbance=disturbance,
+        phi=phi,
+        kappa=kappa,
+        saturated=saturated,
+        step_time_median=float(np.median(step_times)),
+    )
+    substeps = max(1, math.ceil(period / stepper.max_step - 1e-9))
+    info = {
+        "plant": stepper.kind,
+        "integrator": "rk4",
+        "integration_step": period / substeps,
+        "substeps": substeps,
+        "controller_state_final": np.asarray(state, dtype=float).tolist(),
+    }
+    return series, info
+
+
+def ball_samples(count: int, dimension: int, radius: float, rng: np.random.Generator) -> np.ndarray:
+    """``count`` points drawn uniformly in the ball ``||d|| <= radius`` of ``R^dimension``:
+    a normalized Gaussian direction times ``radius * U^(1/dimension)``."""
+    if radius == 0:
+        return np.zeros((count, dimension))
+    directions = rng.standard_normal((count, dimension))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    radii = radius * rng.random(count) ** (1.0 / dimension)
+    return directions * radii[:, None]
