@@ -24,20 +24,21 @@ When the bound method works on the Slotine-Li regressor, one ``Y_SL(q, qd, qd_a,
 gives both the nominal torque ``Y_SL pi0`` and the enclosure, since
 ``M qdd_a + C qd_a + g = Y_SL pi`` (:mod:`urpc.model.regressor`).
 
-**Sampled-data gain limit** (optional; not in the paper). Under a zero-order hold of period ``T``
-the feedback ``v = -D r`` with ``D = kappa ||rho|| + phi`` discretizes, per eigen-mode ``i`` of the
-inertia matrix, to ``r+ = (1 - D T / lambda_i) r``: the sampled loop is unstable once
-``D T / lambda_i > 2``. ``rho`` is dominated by the heavy proximal joints while the lightest mode
-is often a wrist, so on a real arm at 1 kHz the paper's law can diverge although its
-continuous-time guarantee holds. With ``sample_period=T`` the controller applies::
+**Sampled-data law** (``sample_period=T``, ``sampled_law="implicit"``; not in the paper). Under a
+zero-order hold the explicit feedback ``v = -D r`` gives, per inertia mode, ``r+ = (1 - D T /
+lambda) r``: unstable once ``D T > 2 lambda``, which the growing gain reaches on light plants. The
+implicit (backward-Euler) discretization evaluates the feedback at the predicted next value of
+``r`` (Acary & Brogliato 2010), with a sound lower bound ``M_L(q)`` of the inertia over the box
+(:class:`~urpc.model.inertia_bounds.InertiaBounds`) as the prediction model::
 
-    v = -V diag(min(D, lambda_i / T)) V^T r,         M0(q) = V diag(lambda_i) V^T
+    D = kappa ||rho|| + phi,       u = M0 qdd_a + C0 qd_a + g0 + D (M_L + D T 1)^{-1} M_L r
 
-i.e. the gain of each mode is capped at the dead-beat value ``lambda_i / T`` of the nominal model
-(half the stability limit, which leaves a factor-2 margin on the true plant's inertia:
-stable while the true modal inertia exceeds ``lambda_i / 2``). Modes whose cap exceeds ``D`` get
-exactly the paper's law, and ``T -> 0`` recovers it everywhere. Where the cap is active the
-continuous-time argument of Theorem 2 does not apply (it does not apply to a sampled loop anyway).
+one CRBA and one symmetric solve per step. On every plant of the box (``M >= M_L``) the sampled
+loop contracts for every gain, and as ``D -> infinity`` the feedback tends to the dead-beat
+``M_L r / T``. Adaptation stops once ``phi`` reaches ``phi_max = 20 max_q lambda_max(M_U(q)) / T``
+(anti-windup: beyond it a larger gain changes the feedback by less than 5 %). The discrete-time
+argument and its ultimate bound are in ``docs/sampled-data.md`` and :mod:`urpc.control.certificate`.
+``sampled_law="paper"`` keeps the paper's law unchanged under the hold (its reproduction).
 
 Build it with :func:`urpc.control.synthesis.synthesize`, which validates the gains.
 """
@@ -49,7 +50,12 @@ import math
 import numpy as np
 
 from ..bounds.base import BoundMethod
+from ..model.inertia_bounds import InertiaBounds
 from .base import Controller, Reference
+
+#: ``phi_max = PHI_MAX_FACTOR * max_q lambda_max(M_U(q)) / T``: past it, the implicit feedback of
+#: every mode is within ``1 / (1 + PHI_MAX_FACTOR)`` of its dead-beat limit, so adaptation stops.
+PHI_MAX_FACTOR = 20.0
 
 
 class IntervalPassivityController(Controller):
@@ -62,11 +68,17 @@ class IntervalPassivityController(Controller):
         kappa_P, kappa_I: Proportional [s/rad] and integral [1/rad^2] parts of ``kappa``.
         phi_P, phi_I: Proportional [N m s/rad] and integral [N m/rad^2] parts of ``phi``.
         Kr: Diagonal of ``Kr`` [1/s], length ``dof``.
-        sample_period: Control period ``T`` [s] for the sampled-data gain limit (module docstring);
-            ``None`` applies the paper's law unchanged.
+        sample_period: Control period ``T`` [s] when the law runs sampled (zero-order hold);
+            ``None``: continuous time, the paper's law.
+        sampled_law: ``"implicit"`` (the sampled-data law of the module docstring) or
+            ``"paper"`` (the paper's law unchanged under the hold); used with ``sample_period``.
+        inertia_bounds: The :class:`~urpc.model.inertia_bounds.InertiaBounds` of the box, required
+            by the implicit law.
 
     Attributes:
         adaptive: True for Theorem 2 (growing gains, one state), False for Theorem 1.
+        phi_max: The ceiling of ``phi`` [N m s/rad] where adaptation stops (implicit law), or
+            ``inf``.
         last_rho_norm: ``||rho||`` [N m] of the latest :meth:`output` call (diagnostic cache).
     """
 
@@ -83,6 +95,8 @@ class IntervalPassivityController(Controller):
         phi_I: float,
         Kr: np.ndarray,
         sample_period: float | None = None,
+        sampled_law: str = "implicit",
+        inertia_bounds: InertiaBounds | None = None,
     ):
         self.bound = bound
         self.robot = bound.robot
@@ -95,6 +109,20 @@ class IntervalPassivityController(Controller):
         self.method = bound.name
         self.last_rho_norm = math.nan
         self.sample_period = None if sample_period is None else float(sample_period)
+        self.sampled_law = sampled_law
+        self.inertia_bounds = inertia_bounds
+        self._implicit = self.sample_period is not None and sampled_law == "implicit"
+        self.phi_max = math.inf
+        if self._implicit:
+            if inertia_bounds is None:
+                raise ValueError("the implicit sampled law needs the box's inertia bounds")
+            self._lower_robot = inertia_bounds.lower_robot
+            self._identity = np.eye(self.robot.dof)
+            self.phi_max = max(
+                self.phi_P,
+                PHI_MAX_FACTOR * inertia_bounds.max_upper_eigenvalue / self.sample_period,
+            )
+        self._s_max = (self.phi_max - self.phi_P) / self.phi_I
         self._uses_regressor = bound.uses_regressor
         self._pi0 = np.asarray(self.robot.nominal_parameters, dtype=float)
         if self._uses_regressor:
@@ -103,10 +131,14 @@ class IntervalPassivityController(Controller):
 
     def __repr__(self) -> str:
         theorem = "Theorem 2, adaptive" if self.adaptive else "Theorem 1, constant gains"
-        limit = "" if self.sample_period is None else f", gain limit at T={self.sample_period:g} s"
+        law = (
+            ""
+            if self.sample_period is None
+            else f", {self.sampled_law} law at T={self.sample_period:g} s"
+        )
         return (
             f"IntervalPassivityController({self.robot.name!r}, method={self.method!r}, "
-            f"epsilon={self.epsilon:g}, {theorem}{limit})"
+            f"epsilon={self.epsilon:g}, {theorem}{law})"
         )
 
     def gains(self, state: np.ndarray) -> tuple[float, float]:
@@ -119,7 +151,7 @@ class IntervalPassivityController(Controller):
     def output(
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
     ) -> np.ndarray:
-        """Joint torque ``u`` [N m] of eq. (4) with (10)."""
+        """Joint torque ``u`` [N m] of eq. (4) with (10), or the implicit sampled law."""
         Kr = self.Kr
         e = reference.q - q
         ed = reference.qd - qd
@@ -144,15 +176,15 @@ class IntervalPassivityController(Controller):
             gain = (self.kappa_P + self.kappa_I * s) * rho_norm + self.phi_P + self.phi_I * s
         else:
             gain = self.kappa_P * rho_norm + self.phi_P
-        if self.sample_period is not None:
+        if self._implicit:
             return nominal + self._sampled_feedback(q, gain, r)
         return nominal + gain * r
 
     def _sampled_feedback(self, q: np.ndarray, gain: float, r: np.ndarray) -> np.ndarray:
-        """``V diag(min(gain, lambda_i / T)) V^T r`` with ``M0(q) = V diag(lambda_i) V^T``."""
-        inertias, modes = np.linalg.eigh(self.robot.M(q))
-        modal_gain = np.minimum(gain, inertias / self.sample_period)
-        return modes @ (modal_gain * (modes.T @ r))
+        """``D (M_L + D T 1)^{-1} M_L r`` [N m], the implicit feedback (one CRBA, one solve)."""
+        inertia = self._lower_robot.M(q)
+        step = gain * self.sample_period
+        return gain * np.linalg.solve(inertia + step * self._identity, inertia @ r)
 
     def state_derivative(
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
@@ -162,7 +194,8 @@ class IntervalPassivityController(Controller):
             return np.zeros(0)
         e = reference.q - q
         norm = math.sqrt(e @ e)
-        return np.array([norm if norm >= self.epsilon else 0.0])
+        growing = norm >= self.epsilon and state[0] < self._s_max
+        return np.array([norm if growing else 0.0])
 
     def advance(
         self,
@@ -173,12 +206,15 @@ class IntervalPassivityController(Controller):
         state: np.ndarray,
         sample_period: float,
     ) -> np.ndarray:
-        """The state one sample later, ``s + T f(||e||)`` (forward Euler, as the base class)."""
+        """The state one sample later, ``min(s + T f(||e||), s_max)`` (forward Euler; ``s_max``
+        is where ``phi`` reaches :attr:`phi_max`)."""
         if not self.adaptive:
             return state
         e = reference.q - q
         norm = math.sqrt(e @ e)
-        return np.array([state[0] + sample_period * norm]) if norm >= self.epsilon else state
+        if norm < self.epsilon or state[0] >= self._s_max:
+            return state
+        return np.array([min(state[0] + sample_period * norm, self._s_max)])
 
     def diagnostics(self, state: np.ndarray) -> dict[str, float]:
         """``phi`` [N m s/rad] and ``kappa`` [s/rad] at this state."""

@@ -14,9 +14,13 @@ import numpy as np
 
 from ..bounds import default_method, make_bound
 from ..errors import InputError
+from ..model.inertia_bounds import InertiaBounds
 from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
 from .interval import IntervalPassivityController
+
+#: The laws a sampled controller can run: ``implicit`` (certified) or ``paper`` (unchanged).
+SAMPLED_LAWS = ("implicit", "paper")
 
 
 def synthesize(
@@ -31,6 +35,7 @@ def synthesize(
     phi_I: float = 1e6,
     Kr: float | Sequence[float] | np.ndarray | None = None,
     sample_period: float | None = None,
+    sampled_law: str = "implicit",
 ) -> IntervalPassivityController:
     """The paper's controller for ``robot`` with uncertain parameters in ``box``.
 
@@ -50,9 +55,12 @@ def synthesize(
         phi_I: [N m/rad^2], > 0 (Theorem 2).
         Kr: Diagonal gain [1/s]: a positive scalar, ``dof`` positive numbers, or a diagonal
             ``dof x dof`` matrix; ``None`` gives the paper's ``3 / sqrt(epsilon)``.
-        sample_period: The control period [s] when the controller runs sampled (zero-order hold):
-            enables the sampled-data gain limit of :mod:`urpc.control.interval`, which keeps the
-            sampled loop stable on light joints. ``None``: the paper's law unchanged.
+        sample_period: The control period [s] when the controller runs sampled (zero-order
+            hold). ``None``: continuous time, the paper's law.
+        sampled_law: With ``sample_period``: ``"implicit"`` (default), the sampled-data law of
+            :mod:`urpc.control.interval` that stays stable on every plant of the box and is
+            certified by :func:`urpc.certify`; ``"paper"``, the paper's law unchanged (it can
+            diverge on light plants at 0.5-1 kHz).
 
     Raises:
         InputError: a gain or ``epsilon`` out of range (the message names the field and the valid
@@ -68,9 +76,15 @@ def synthesize(
         sample_period = _number(
             "sample_period", sample_period, "a finite number > 0 [s] or None", lambda x: x > 0
         )
+    if sampled_law not in SAMPLED_LAWS:
+        raise InputError(
+            f"{sampled_law!r} is not a sampled law; valid: {', '.join(SAMPLED_LAWS)}",
+            field="sampled_law",
+        )
     if method is None:
         method = default_method(box)
     bound = make_bound(method, robot, box)
+    implicit = sample_period is not None and sampled_law == "implicit"
     return IntervalPassivityController(
         bound,
         epsilon,
@@ -80,6 +94,8 @@ def synthesize(
         phi_I=phi_I,
         Kr=gains,
         sample_period=sample_period,
+        sampled_law=sampled_law,
+        inertia_bounds=InertiaBounds(robot, box) if implicit else None,
     )
 
 
