@@ -17,7 +17,7 @@ import yaml
 from conftest import RR_DIR
 
 from urpc.__main__ import main
-from urpc.model.robot import inertia_problem
+from urpc.model.inertia import inertia_problem
 from urpc.sim.metrics import METRIC_NAMES
 from urpc.sim.results import SimulationResult
 from urpc.studies.scenario import build, load_scenario, run_scenario, sample_true_parameters

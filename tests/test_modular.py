@@ -18,8 +18,9 @@ import pytest
 import yaml
 
 from urpc.errors import InputError
+from urpc.model.inertia import inertia_problem
 from urpc.model.modular import assemble, load_assembly, load_module_library
-from urpc.model.robot import inertia_problem, load_robot
+from urpc.model.robot import load_robot
 from urpc.model.uncertainty import PHYSICAL_FIELDS, load_uncertainty, physical_coordinates
 
 ROOT = Path(__file__).resolve().parents[1]
