@@ -60,7 +60,7 @@ def test_scenarios_meet_epsilon_at_1_khz(name):
 
 def test_without_the_gain_limit_the_panda_diverges_at_1_khz():
     paper_law = load_scenario("panda/sampled").with_overrides(
-        duration=0.1, controller_options={"interval": {"sampled_gain_limit": False}}
+        duration=0.1, controller_options={"interval": {"sampled_law": "paper"}}
     )
     with pytest.raises(SimulationError, match="diverged"):
         run_scenario(paper_law)
@@ -74,9 +74,7 @@ def test_the_panda_failure_is_the_zero_order_hold_gain_limit():
     """
     scenario = load_scenario("panda/sampled")
     setup = build(scenario)
-    paper_law = scenario.with_overrides(
-        controller_options={"interval": {"sampled_gain_limit": False}}
-    )
+    paper_law = scenario.with_overrides(controller_options={"interval": {"sampled_law": "paper"}})
     controller = build_controller(build(paper_law))
     reference = setup.trajectory.reference(0.0)
     state = controller.initial_state()

@@ -20,6 +20,7 @@ from urpc.studies.scenario import (
     Scenario,
     build,
     build_controller,
+    interval_synthesis_options,
     load_scenario,
     parse_scenario,
     run_scenario,
@@ -49,9 +50,9 @@ def test_paper_scenarios_load_and_build(number, ic):
     assert scenario.uncertainty.name == "uncertainty.yaml"
     assert scenario.uncertainty.read_bytes() == (RR_DIR / "uncertainty.yaml").read_bytes()
     paper_gains = {"kappa_P": 2.0, "kappa_I": 1.0, "phi_P": 1.0, "phi_I": 1e6}
-    # Sampled paper scenarios run the paper's law unchanged (no sampled-data gain limit).
+    # Sampled paper scenarios run the paper's law unchanged (not the sampled-data law).
     if period is not None:
-        paper_gains["sampled_gain_limit"] = False
+        paper_gains["sampled_law"] = "paper"
     assert scenario.options == paper_gains
     r_alpha = scenario.controller_options["r-alpha"]
     assert (r_alpha["r"], r_alpha["alpha"], r_alpha["Q"], r_alpha["eta"]) == (1e-2, 1, 35, 7e-5)
@@ -347,14 +348,14 @@ def test_sampled_true_parameters_are_named_in_the_description(tmp_path):
     assert f"iyy = {values['iyy']:.6g} kg m^2" in description
 
 
-def test_sampled_gain_limit_follows_the_scenario():
-    paper = build(load_scenario("rr_planar/s3_ic1"))
-    assert build_controller(paper).sample_period is None
-    limited = build(
-        load_scenario("rr_planar/s3_ic1").with_overrides(
-            controller_options={"interval": {"sampled_gain_limit": True}}
-        )
-    )
-    assert build_controller(limited).sample_period == 1e-3
-    continuous = build(load_scenario("rr_planar/s1_ic1"))
-    assert build_controller(continuous).sample_period is None
+def test_sampled_law_follows_the_scenario():
+    paper = load_scenario("rr_planar/s3_ic1")
+    options = interval_synthesis_options(paper)
+    assert options["sample_period"] == 1e-3 and options["sampled_law"] == "paper"
+    implicit = paper.with_overrides(controller_options={"interval": {"sampled_law": "implicit"}})
+    assert interval_synthesis_options(implicit)["sampled_law"] == "implicit"
+    default = load_scenario("ur5/sampled")
+    assert interval_synthesis_options(default)["sampled_law"] == "implicit"  # the default
+    continuous = interval_synthesis_options(load_scenario("rr_planar/s1_ic1"))
+    assert continuous["sample_period"] is None
+    assert build_controller(build(implicit)).name == "interval"

@@ -1,24 +1,11 @@
-"""Modular arms: a library of modules described in files, composed into one URDF and one box.
+"""Modular arms: modules of a library composed into one URDF and one uncertainty box.
 
-A *module* is one rigid body with its nominal inertial parameters, its connection frames and its
-own uncertainty, described by a YAML file ``<name>.yaml`` of a library folder (the built-in one is
-``robots/modules``; ``docs/modular.md`` documents every field). Kinds:
-
-* ``base``: the root, fixed to the world; one output flange (``distal``).
-* ``actuator``: a revolute joint and the housing it turns; the joint sits at the module frame and
-  turns about ``joint.axis`` (module frame); input (``proximal``) and output (``distal``) flanges.
-* ``link``, ``tool``: rigid parts joined by fixed joints; a tool's output frame is its TCP.
-* ``payload``: a held object; it is not put in the URDF but becomes the uncertainty file's
-  ``payload:`` entry, fixed to the TCP, so that changing the payload changes only the box.
-
-Connecting module ``b`` after module ``a`` makes ``b``'s input frame coincide with ``a``'s output
-frame, so ``b``'s module frame sits at ``X_a = D_a P_b^-1`` in ``a``'s module frame (``D``, ``P``
-the output and input frame placements). Flange connector types must be equal.
-
-:func:`assemble` writes the URDF with yourdfpy and the combined uncertainty file; the URDF link of
-module ``i`` is ``m<i>_<module>`` (its frame is the module frame, so the module's uncertainty
-applies to it unchanged), revolute joints are ``joint1 .. jointN``, and a massless ``tcp`` link
-marks the output frame of the last module.
+The modules and their files are described in :mod:`urpc.model.modules`. :func:`assemble` checks
+the chain (a base first, matching flange connector types, at least one actuator, a payload last),
+writes the URDF (:mod:`urpc.model.assembly_urdf`) and the combined uncertainty file: each moving
+module's box applies unchanged to its link ``m<i>_<module>``, whose frame is the module frame, and
+a payload module becomes the ``payload:`` entry on the ``tcp`` link. Assembly files (schema
+:class:`urpc.formats.assembly.AssemblyFile`) name the modules in order.
 """
 
 from __future__ import annotations
@@ -29,449 +16,43 @@ import re
 import shutil
 import tempfile
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 import yaml
 
 from ..errors import InputError, did_you_mean
+from ..formats.assembly import AssemblyFile
+from ..formats.base import read_yaml, validate
+from .assembly_urdf import PAYLOAD_NAME, SNAP, TCP_LINK, Part, compose_urdf, snapped
 from .catalog import builtin_root
-from .robot import Robot, inertia_problem, load_robot
-from .uncertainty import (
-    PHYSICAL_FIELDS,
-    LinkBox,
-    ParameterBox,
-    inertia_from_physical,
-    parse_link_box,
-    parse_number,
-    parse_uncertainty,
-    read_yaml,
+from .modules import (
+    KINDS,
+    SHAPES,
+    Connector,
+    JointSpec,
+    Module,
+    ModuleKind,
+    ModuleLibrary,
+    Shape,
+    load_module_library,
+    read_module,
 )
+from .parameter_box import PHYSICAL_FIELDS, ParameterBox
+from .robot import Robot, load_robot
+from .uncertainty import parse_uncertainty
 
-ModuleKind = Literal["base", "actuator", "link", "tool", "payload"]
-KINDS: tuple[str, ...] = ("base", "actuator", "link", "tool", "payload")
-SHAPES: tuple[str, ...] = ("cylinder", "tube", "box")
-#: Name of the massless link at the output frame of the last module (payloads are fixed to it).
-TCP_LINK = "tcp"
-#: Name of the payload body in the combined uncertainty box.
-PAYLOAD_NAME = "payload"
+__all__ = [
+    "KINDS", "PAYLOAD_NAME", "SHAPES", "TCP_LINK", "Assembly", "Connector", "JointSpec", "Module",
+    "ModuleKind", "ModuleLibrary", "Part", "Shape", "assemble", "builtin_assemblies",
+    "load_assembly", "load_module_library", "read_module",
+]  # fmt: skip
 
-_MODULE_KEYS = (
-    "name", "kind", "description", "shape", "inertial", "joint", "proximal", "distal",
-    "uncertainty",
-)  # fmt: skip
-_JOINT_KEYS = ("axis", "lower", "upper", "effort", "velocity")
-_CONNECTOR_KEYS = ("connector", "xyz", "rpy")
-_SHAPE_DIMENSIONS = {
-    "cylinder": ("radius", "length"),
-    "tube": ("radius", "wall", "length", "density"),
-    "box": ("size",),
-}
-_ASSEMBLY_KEYS = ("name", "description", "modules", "disturbance")
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
-_SNAP = 1e-12  # rotation entries this close to 0 or +-1 are made exact (rpy round trip)
-
-
-# ============================================================================ module description
-@dataclass(frozen=True)
-class Connector:
-    """A connection frame (flange) of a module, given in the module frame.
-
-    Attributes:
-        type: Connector type (``"L"``, ``"M"``, ``"tcp"``, ...); a module's input connects to the
-            previous module's output only if both types are equal.
-        xyz: Origin of the frame [m].
-        rpy: Orientation, URDF roll-pitch-yaw [rad]; by convention the frame's z axis points along
-            the chain, away from the base.
-    """
-
-    type: str
-    xyz: tuple[float, float, float]
-    rpy: tuple[float, float, float]
-
-    @property
-    def placement(self) -> pin.SE3:
-        """Pose of the frame in the module frame."""
-        return pin.SE3(pin.rpy.rpyToMatrix(np.array(self.rpy)), np.array(self.xyz))
-
-
-@dataclass(frozen=True)
-class JointSpec:
-    """The revolute joint of an actuator; it turns the module about ``axis`` at the module frame.
-
-    Attributes:
-        axis: Unit joint axis in the module frame.
-        lower, upper: Position limits [rad].
-        effort: Torque limit [N m].
-        velocity: Velocity limit [rad/s].
-    """
-
-    axis: tuple[float, float, float]
-    lower: float
-    upper: float
-    effort: float
-    velocity: float
-
-
-@dataclass(frozen=True)
-class Shape:
-    """Geometry of a module, for drawings and URDF visuals (the inertial data are authoritative).
-
-    Attributes:
-        kind: ``"cylinder"`` (``radius``, ``length`` [m], axis z), ``"tube"`` (thin-walled:
-            mean ``radius``, ``wall``, ``length`` [m], ``density`` [kg/m^3], axis z) or ``"box"``
-            (``size`` [m], three sides along x, y, z).
-        dimensions: The dimensions named above.
-        xyz, rpy: Pose of the shape's center in the module frame [m], [rad].
-    """
-
-    kind: str
-    dimensions: Mapping[str, Any]
-    xyz: tuple[float, float, float]
-    rpy: tuple[float, float, float]
-
-    @property
-    def placement(self) -> pin.SE3:
-        return pin.SE3(pin.rpy.rpyToMatrix(np.array(self.rpy)), np.array(self.xyz))
-
-
-@dataclass(frozen=True, eq=False)
-class Module:
-    """One module of a library, read from ``<name>.yaml``.
-
-    Attributes:
-        name: Module name (the file stem).
-        kind: One of :data:`KINDS`.
-        source: The module file.
-        description: Free text.
-        inertial: Nominal physical coordinates :data:`urpc.model.uncertainty.PHYSICAL_FIELDS` in the
-            module frame: mass [kg], CoM [m], rotational inertia about the CoM [kg m^2].
-        proximal: Input frame (``None`` for a base).
-        distal: Output frame (``None`` for a payload).
-        joint: The actuator's joint (``None`` for other kinds).
-        uncertainty: The module's box, an entry in the uncertainty format (module frame).
-        box: That box, resolved against :attr:`inertial` (``None`` for a base).
-        shape: Geometry for drawings, or ``None``.
-    """
-
-    name: str
-    kind: str
-    source: Path
-    description: str
-    inertial: np.ndarray
-    proximal: Connector | None
-    distal: Connector | None
-    joint: JointSpec | None
-    uncertainty: Mapping[str, Any]
-    box: LinkBox | None
-    shape: Shape | None
-
-    @property
-    def inertia(self) -> pin.Inertia:
-        """Nominal spatial inertia in the module frame."""
-        return inertia_from_physical(self.inertial)
-
-
-@dataclass(frozen=True, eq=False)
-class ModuleLibrary:
-    """The modules of one folder, by name. Use :func:`load_module_library` to read one."""
-
-    root: Path
-    modules: Mapping[str, Module]
-
-    def __getitem__(self, name: str) -> Module:
-        try:
-            return self.modules[name]
-        except KeyError:
-            raise InputError(
-                f"unknown module '{name}'; " + did_you_mean(name, self.modules),
-                source=self.root,
-            ) from None
-
-    def __contains__(self, name: object) -> bool:
-        return name in self.modules
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self.modules)
-
-    def __len__(self) -> int:
-        return len(self.modules)
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        return tuple(self.modules)
-
-    def of_kind(self, kind: str) -> tuple[str, ...]:
-        """Names of the modules of one kind."""
-        return tuple(name for name, module in self.modules.items() if module.kind == kind)
-
-
-# ============================================================================ reading modules
-_LIBRARY_CACHE: dict[Path, tuple[list, ModuleLibrary]] = {}
-
-
-def load_module_library(path: str | Path | None = None) -> ModuleLibrary:
-    """Read every module file ``*.yaml`` of a folder (default: the built-in ``robots/modules``).
-
-    The result is cached per folder and re-read only when a file is added, removed or changed.
-
-    Raises:
-        InputError: the folder does not exist or holds no module; a module file is invalid
-            (naming the file and the field).
-    """
-    root = Path(builtin_root() / "modules" if path is None else path).expanduser().resolve()
-    if not root.is_dir():
-        raise InputError("module library folder does not exist", source=root)
-    signature = []
-    with os.scandir(root) as entries:
-        for entry in entries:
-            if entry.name.endswith(".yaml") and entry.is_file():
-                stat = entry.stat()
-                signature.append((entry.name, stat.st_mtime_ns, stat.st_size))
-    signature.sort()
-    cached = _LIBRARY_CACHE.get(root)
-    if cached is not None and cached[0] == signature:
-        return cached[1]
-    if not signature:
-        raise InputError("the module library holds no module file (*.yaml)", source=root)
-    modules = {}
-    for filename, _, _ in signature:
-        module = read_module(root / filename)
-        modules[module.name] = module
-    library = ModuleLibrary(root, modules)
-    _LIBRARY_CACHE[root] = (signature, library)
-    return library
-
-
-def read_module(path: str | Path) -> Module:
-    """Read and validate one module file.
-
-    Raises:
-        InputError: naming the file and the field, for an unknown key or kind, a missing or
-            superfluous connection frame or joint, a non-physical inertia, an invalid box.
-    """
-    path = Path(path)
-    source = str(path)
-    doc = read_yaml(path)
-    _mapping(doc, source, "(top level)")
-    _known_keys(doc, _MODULE_KEYS, source, "")
-    name = str(doc.get("name", path.stem))
-    if name != path.stem:
-        raise InputError(
-            f"the module name '{name}' differs from the file name; name the file '{name}.yaml' "
-            "or drop the name field",
-            source,
-            "name",
-        )
-    kind = doc.get("kind")
-    if kind not in KINDS:
-        raise InputError(
-            f"unknown module kind {kind!r}; " + did_you_mean(str(kind), KINDS), source, "kind"
-        )
-
-    def required(key: str, needed: bool, why: str) -> None:
-        if needed and doc.get(key) is None:
-            raise InputError(f"a {kind} module needs '{key}' ({why})", source, key)
-        if not needed and doc.get(key) is not None:
-            raise InputError(f"a {kind} module has no '{key}' ({why})", source, key)
-
-    required("proximal", kind != "base", "the input frame; only a base has none")
-    required("distal", kind != "payload", "the output frame; only a payload has none")
-    required("joint", kind == "actuator", "only actuators have a joint")
-    if kind == "base" and doc.get("uncertainty"):
-        raise InputError(
-            "a base is fixed to the world, so its parameters do not enter the dynamics; "
-            "remove its uncertainty",
-            source,
-            "uncertainty",
-        )
-    if "inertial" not in doc:
-        raise InputError("every module needs its nominal inertial parameters", source, "inertial")
-    inertial = _read_inertial(doc["inertial"], source, allow_zero_mass=kind == "payload")
-    uncertainty = doc.get("uncertainty") or {}
-    _mapping(uncertainty, source, "uncertainty")
-    if kind == "payload" and "barycentric" in uncertainty:
-        raise InputError(
-            "a payload box is physical (mass, com_*, i**): it becomes the uncertainty file's "
-            "payload entry, which has no barycentric form",
-            source,
-            "uncertainty.barycentric",
-        )
-    box = None
-    if kind != "base":
-        box = parse_link_box(
-            uncertainty,
-            name,
-            inertia_from_physical(inertial),
-            source,
-            "uncertainty",
-            allow_zero_mass=kind == "payload",
-        )
-    return Module(
-        name=name,
-        kind=kind,
-        source=path,
-        description=str(doc.get("description", "")),
-        inertial=inertial,
-        proximal=_read_connector(doc.get("proximal"), source, "proximal"),
-        distal=_read_connector(doc.get("distal"), source, "distal"),
-        joint=_read_joint(doc.get("joint"), source),
-        uncertainty=uncertainty,
-        box=box,
-        shape=_read_shape(doc.get("shape"), source),
-    )
-
-
-def _read_inertial(doc: Any, source: str, allow_zero_mass: bool) -> np.ndarray:
-    _mapping(doc, source, "inertial")
-    _known_keys(doc, PHYSICAL_FIELDS, source, "inertial.")
-    if "mass" not in doc:
-        raise InputError("the nominal mass [kg] is required", source, "inertial.mass")
-    values = np.array(
-        [
-            parse_number(doc.get(key, 0.0), source, f"inertial.{key}", "a number")
-            for key in PHYSICAL_FIELDS
-        ]
-    )
-    if not np.all(np.isfinite(values)):
-        raise InputError("inertial parameters must be finite numbers", source, "inertial")
-    if values[0] < 0 or (values[0] == 0 and not allow_zero_mass):
-        raise InputError(
-            f"mass {values[0]:g} must be {'>= 0' if allow_zero_mass else '> 0'} [kg]",
-            source,
-            "inertial.mass",
-        )
-    problem = inertia_problem(np.asarray(inertia_from_physical(values).inertia))
-    if problem:
-        raise InputError(f"non-physical inertia: {problem}", source, "inertial")
-    return values
-
-
-def _read_connector(doc: Any, source: str, key: str) -> Connector | None:
-    if doc is None:
-        return None
-    _mapping(doc, source, key)
-    _known_keys(doc, _CONNECTOR_KEYS, source, f"{key}.")
-    if not doc.get("connector"):
-        raise InputError(
-            "the connector type is required (for example L, M or tcp): only flanges of the same "
-            "type connect",
-            source,
-            f"{key}.connector",
-        )
-    return Connector(
-        type=str(doc["connector"]),
-        xyz=_vector(doc.get("xyz", [0, 0, 0]), source, f"{key}.xyz"),
-        rpy=_vector(doc.get("rpy", [0, 0, 0]), source, f"{key}.rpy"),
-    )
-
-
-def _read_joint(doc: Any, source: str) -> JointSpec | None:
-    if doc is None:
-        return None
-    _mapping(doc, source, "joint")
-    _known_keys(doc, _JOINT_KEYS, source, "joint.")
-    for key in _JOINT_KEYS:
-        if key not in doc:
-            raise InputError(
-                f"the joint needs '{key}' (all of: {', '.join(_JOINT_KEYS)})",
-                source,
-                f"joint.{key}",
-            )
-    axis = np.array(_vector(doc["axis"], source, "joint.axis"))
-    norm = float(np.linalg.norm(axis))
-    if norm < 1e-9:
-        raise InputError("the joint axis must be a non-zero vector", source, "joint.axis")
-    values = {k: parse_number(doc[k], source, f"joint.{k}", "a number") for k in _JOINT_KEYS[1:]}
-    if not values["lower"] < values["upper"]:
-        raise InputError(
-            f"lower limit {values['lower']:g} must be below upper limit {values['upper']:g} [rad]",
-            source,
-            "joint.lower",
-        )
-    for key in ("effort", "velocity"):
-        if not values[key] > 0:
-            raise InputError(f"{key} limit must be > 0", source, f"joint.{key}")
-    return JointSpec(axis=tuple(float(a) for a in axis / norm), **values)
-
-
-def _read_shape(doc: Any, source: str) -> Shape | None:
-    if doc is None:
-        return None
-    _mapping(doc, source, "shape")
-    kinds = [k for k in doc if k in SHAPES]
-    _known_keys(doc, (*SHAPES, "xyz", "rpy"), source, "shape.")
-    if len(kinds) != 1:
-        raise InputError(f"give exactly one shape, one of: {', '.join(SHAPES)}", source, "shape")
-    kind = kinds[0]
-    dimensions = doc[kind]
-    _mapping(dimensions, source, f"shape.{kind}")
-    _known_keys(dimensions, _SHAPE_DIMENSIONS[kind], source, f"shape.{kind}.")
-    values: dict[str, Any] = {}
-    for key in _SHAPE_DIMENSIONS[kind]:
-        if key not in dimensions:
-            raise InputError(
-                f"a {kind} needs {', '.join(_SHAPE_DIMENSIONS[kind])}", source, f"shape.{kind}"
-            )
-        if key == "size":
-            values[key] = _vector(dimensions[key], source, f"shape.{kind}.size")
-        else:
-            values[key] = parse_number(dimensions[key], source, f"shape.{kind}.{key}", "a number")
-    return Shape(
-        kind=kind,
-        dimensions=values,
-        xyz=_vector(doc.get("xyz", [0, 0, 0]), source, "shape.xyz"),
-        rpy=_vector(doc.get("rpy", [0, 0, 0]), source, "shape.rpy"),
-    )
-
-
-def _vector(value: Any, source: str, fieldname: str) -> tuple[float, float, float]:
-    if not isinstance(value, list | tuple) or len(value) != 3:
-        raise InputError(f"{value!r} is not a list of 3 numbers", source, fieldname)
-    numbers = tuple(parse_number(v, source, fieldname, "a number") for v in value)
-    if not all(np.isfinite(numbers)):
-        raise InputError(f"{value!r} has a non-finite entry", source, fieldname)
-    return numbers  # type: ignore[return-value]
-
-
-def _mapping(value: Any, source: str | None, fieldname: str) -> None:
-    if not isinstance(value, Mapping):
-        raise InputError(
-            f"expected a mapping (key: value lines), got {type(value).__name__} {value!r}",
-            source,
-            fieldname,
-        )
-
-
-def _known_keys(doc: Mapping, valid: Sequence[str], source: str | None, prefix: str) -> None:
-    for key in doc:
-        if str(key) not in valid:
-            raise InputError(
-                f"unknown key '{key}'; " + did_you_mean(str(key), valid), source, f"{prefix}{key}"
-            )
-
-
-# ============================================================================ assemblies
-@dataclass(frozen=True)
-class Part:
-    """Where one module of an assembly went.
-
-    Attributes:
-        module: Module name.
-        kind: Module kind.
-        link: Its URDF link (``m<i>_<module>``), or the payload's name in the box.
-        joint: The URDF joint attaching that link to the previous one (``joint<k>`` for an
-            actuator, ``m<i>_<module>_fixed`` otherwise), ``None`` for the base and a payload.
-    """
-
-    module: str
-    kind: str
-    link: str
-    joint: str | None
 
 
 @dataclass(frozen=True)
@@ -577,26 +158,15 @@ def load_assembly(
             )
         path = shipped[text]
     source = str(path)
-    doc = read_yaml(path)
-    _mapping(doc, source, "(top level)")
-    _known_keys(doc, _ASSEMBLY_KEYS, source, "")
-    if "modules" not in doc:
-        raise InputError("the list of module names is required", source, "modules")
-    disturbance = doc.get("disturbance", "unknown")
-    if isinstance(disturbance, str) and disturbance.strip().lower() == "unknown":
-        disturbance = None
-    elif disturbance is not None:
-        disturbance = parse_number(disturbance, source, "disturbance", "a bound [N m] or 'unknown'")
-        if not (np.isfinite(disturbance) and disturbance >= 0):
-            raise InputError("the bound must be a finite number >= 0 [N m]", source, "disturbance")
+    spec = validate(AssemblyFile, read_yaml(path), source)
     return _assemble(
-        doc["modules"],
-        str(doc.get("name", path.stem)),
+        spec.modules,
+        spec.name or path.stem,
         library,
         out_dir,
-        disturbance,
+        spec.disturbance,
         source=source,
-        description=doc.get("description"),
+        description=spec.description,
     )
 
 
@@ -617,7 +187,7 @@ def _assemble(
             f"assembly name {name!r} must be letters, digits, '_', '.' or '-'", source, "name"
         )
     chain = _validated_chain(names, library, source)
-    urdf, parts = _compose_urdf(chain, name)
+    urdf, parts = compose_urdf(chain, name)
     document = _uncertainty_document(chain, parts, name, disturbance, description)
 
     folder = Path(out_dir) if out_dir is not None else _temporary_folder()
@@ -713,115 +283,6 @@ def _validated_chain(names: Any, library: ModuleLibrary, source: str | None) -> 
     return chain
 
 
-def _compose_urdf(chain: Sequence[Module], name: str) -> tuple[Any, tuple[Part, ...]]:
-    import yourdfpy
-
-    links, joints, parts = [], [], []
-    parent: Module | None = None
-    parent_link = ""
-    n_joints = 0
-    for i, module in enumerate(chain):
-        if module.kind == "payload":
-            parts.append(Part(module.name, module.kind, PAYLOAD_NAME, None))
-            continue
-        link = f"m{i}_{module.name}"
-        links.append(
-            yourdfpy.Link(name=link, inertial=_inertial(module), visuals=_visuals(module, link))
-        )
-        joint_name = None
-        if parent is not None:
-            origin = _homogeneous(parent.distal.placement * module.proximal.placement.inverse())
-            if module.kind == "actuator":
-                n_joints += 1
-                joint_name = f"joint{n_joints}"
-                spec = module.joint
-                joints.append(
-                    yourdfpy.Joint(
-                        name=joint_name,
-                        type="revolute",
-                        parent=parent_link,
-                        child=link,
-                        origin=origin,
-                        axis=np.array(spec.axis),
-                        limit=yourdfpy.Limit(
-                            effort=spec.effort,
-                            velocity=spec.velocity,
-                            lower=spec.lower,
-                            upper=spec.upper,
-                        ),
-                    )
-                )
-            else:
-                joint_name = f"{link}_fixed"
-                joints.append(
-                    yourdfpy.Joint(
-                        name=joint_name, type="fixed", parent=parent_link, child=link, origin=origin
-                    )
-                )
-        parts.append(Part(module.name, module.kind, link, joint_name))
-        parent, parent_link = module, link
-    links.append(yourdfpy.Link(name=TCP_LINK))
-    joints.append(
-        yourdfpy.Joint(
-            name=f"{TCP_LINK}_fixed",
-            type="fixed",
-            parent=parent_link,
-            child=TCP_LINK,
-            origin=_homogeneous(parent.distal.placement),
-        )
-    )
-    robot = yourdfpy.Robot(name=name, links=links, joints=joints)
-    urdf = yourdfpy.URDF(robot=robot, build_scene_graph=False, load_meshes=False)
-    return urdf, tuple(parts)
-
-
-def _inertial(module: Module) -> Any:
-    import yourdfpy
-
-    inertia = module.inertia
-    origin = np.eye(4)
-    origin[:3, 3] = inertia.lever
-    return yourdfpy.Inertial(
-        origin=origin, mass=float(inertia.mass), inertia=np.asarray(inertia.inertia).copy()
-    )
-
-
-def _visuals(module: Module, link: str) -> list[Any]:
-    import yourdfpy
-
-    shape = module.shape
-    if shape is None:
-        return []
-    d = shape.dimensions
-    if shape.kind == "box":
-        geometry = yourdfpy.Geometry(box=yourdfpy.Box(size=np.array(d["size"])))
-    else:
-        radius = d["radius"] + (d["wall"] / 2 if shape.kind == "tube" else 0.0)
-        geometry = yourdfpy.Geometry(cylinder=yourdfpy.Cylinder(radius=radius, length=d["length"]))
-    return [
-        yourdfpy.Visual(
-            name=f"{link}_visual", origin=_homogeneous(shape.placement), geometry=geometry
-        )
-    ]
-
-
-def _snapped(matrix: np.ndarray) -> np.ndarray:
-    """Entries within :data:`_SNAP` of 0 or +-1 made exact.
-
-    Rotations by multiples of 90 degrees (the usual flange orientations) then survive yourdfpy's
-    matrix -> rpy conversion exactly, also at the rpy singularity (pitch = +-90 degrees).
-    """
-    matrix = np.where(np.abs(matrix) < _SNAP, 0.0, matrix)
-    return np.where(np.abs(np.abs(matrix) - 1.0) < _SNAP, np.sign(matrix), matrix)
-
-
-def _homogeneous(placement: pin.SE3) -> np.ndarray:
-    matrix = np.eye(4)
-    matrix[:3, :3] = _snapped(placement.rotation)
-    matrix[:3, 3] = np.where(np.abs(placement.translation) < _SNAP, 0.0, placement.translation)
-    return matrix
-
-
 def _uncertainty_document(
     chain: Sequence[Module],
     parts: Sequence[Part],
@@ -872,7 +333,7 @@ def _payload_entry(module: Module) -> dict[str, Any]:
 
 def _physical_map(pose: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
     """``(L, b)`` with ``p' = L p + b`` the physical coordinates of a body moved by ``pose``."""
-    R = _snapped(pose.rotation)
+    R = snapped(pose.rotation)
     linear = np.zeros((10, 10))
     linear[0, 0] = 1.0
     linear[1:4, 1:4] = R
@@ -884,8 +345,8 @@ def _physical_map(pose: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
         rotated = R @ unit @ R.T
         linear[4:, 4 + j] = [rotated[r, c] for r, c in entries]
     offset = np.zeros(10)
-    offset[1:4] = np.where(np.abs(pose.translation) < _SNAP, 0.0, pose.translation)
-    return _snapped(linear), offset
+    offset[1:4] = np.where(np.abs(pose.translation) < SNAP, 0.0, pose.translation)
+    return snapped(linear), offset
 
 
 def _plain(value: Any) -> Any:

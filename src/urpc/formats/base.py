@@ -1,0 +1,191 @@
+"""What every file format shares: the base schema, YAML reading, and errors that say what to fix.
+
+A format is a pydantic model derived from :class:`FileFormat`. :func:`validate` checks a parsed
+document against it and turns pydantic's :class:`~pydantic.ValidationError` into the package's
+:class:`~urpc.errors.InputError`, naming the file, the field path (``links.link2.mass``), what was
+found and what is valid (with "did you mean" for a misspelt key or choice).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any, TypeVar
+
+import yaml
+from pydantic import BaseModel, ConfigDict, ValidationError, model_validator
+from pydantic.fields import FieldInfo
+
+from ..errors import InputError, did_you_mean
+
+Format = TypeVar("Format", bound="FileFormat")
+
+
+class FieldError(ValueError):
+    """A validator's complaint about one sub-field of the value it checks (``path`` below it)."""
+
+    def __init__(self, path: str | tuple[str | int, ...], message: str):
+        super().__init__(message)
+        self.path = (path,) if isinstance(path, str) else tuple(path)
+
+
+class FileFormat(BaseModel):
+    """Base of every format: a mapping whose keys are the fields (or their aliases), no others.
+
+    A key with no value (``key:`` or ``key: null``) counts as not given.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _known_keys(cls, data: Any) -> Any:
+        if not isinstance(data, Mapping):
+            raise ValueError(
+                f"expected a mapping (key: value lines), got {type(data).__name__} {data!r}"
+            )
+        valid = [field.alias or name for name, field in cls.model_fields.items()]
+        for key in data:
+            if str(key) not in valid:
+                raise FieldError(str(key), f"unknown key '{key}'; " + did_you_mean(str(key), valid))
+        return {key: value for key, value in data.items() if value is not None}
+
+
+#: libyaml's safe loader when PyYAML was built with it (5-10x faster), else the Python one.
+_SafeLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+def read_yaml(path: str | Path) -> Any:
+    """Load a YAML file, turning every I/O or syntax problem into an :class:`InputError`."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("file does not exist", source=path)
+    try:
+        with path.open() as stream:
+            return yaml.load(stream, Loader=_SafeLoader)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise InputError(f"YAML syntax error{where}: {problem}", source=path) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read the file ({exc})", source=path) from None
+
+
+def validate(
+    schema: type[Format],
+    document: Any,
+    source: str | Path | None = None,
+    context: Mapping[str, Any] | None = None,
+    hints: Mapping[str, Sequence[str]] | None = None,
+) -> Format:
+    """``document`` (parsed YAML) checked against ``schema``.
+
+    Args:
+        context: Passed to the validators (for instance the folder relative paths start from).
+        hints: Valid values of fields that only the caller knows (field path -> names), added to
+            the message of a missing field.
+
+    Raises:
+        InputError: the first problem, naming ``source`` and the field.
+    """
+    try:
+        return schema.model_validate({} if document is None else document, context=context)
+    except ValidationError as exc:
+        raise input_error(exc, document, schema, source, hints) from None
+
+
+def input_error(
+    exc: ValidationError,
+    document: Any,
+    schema: type[BaseModel],
+    source: str | Path | None,
+    hints: Mapping[str, Sequence[str]] | None = None,
+) -> InputError:
+    """The :class:`InputError` of the first problem ``exc`` reports."""
+    error = exc.errors(include_url=False)[0]
+    kind, value, ctx = error["type"], error.get("input"), error.get("ctx") or {}
+    path = _document_path(document, error["loc"], keep_last=kind == "missing")
+    cause = ctx.get("error")
+    if isinstance(cause, FieldError):
+        path += cause.path
+    name = str(path[-1]) if path else "value"
+    if isinstance(cause, ValueError):
+        message = str(cause)
+    elif kind == "union_tag_not_found":  # a mapping without its discriminating key
+        path += (ctx["discriminator"].strip("'"),)
+        message = f"'{path[-1]}' is required"
+    elif kind == "missing":
+        found = _field(schema, path)
+        description = found.description if found is not None else None
+        message = f"'{name}' is required" + (f" ({description})" if description else "")
+        choices = (hints or {}).get(_dotted(path))
+        if choices is not None:
+            message += f"; valid: {', '.join(choices)}"
+    elif kind in ("literal_error", "union_tag_invalid", "enum"):
+        if kind == "union_tag_invalid":
+            path += (ctx["discriminator"].strip("'"),)
+            value, name = ctx["tag"], ctx["discriminator"].strip("'")
+        choices = re.findall(r"'([^']*)'", ctx.get("expected") or ctx.get("expected_tags", ""))
+        found = _field(schema, path)
+        what = found.title if found is not None and found.title else name
+        message = f"unknown {what} {value!r}; " + did_you_mean(str(value), choices)
+    elif kind in ("dict_type", "model_type", "model_attributes_type"):
+        message = f"expected a mapping (key: value lines), got {type(value).__name__} {value!r}"
+    elif kind in ("list_type", "tuple_type"):
+        message = f"expected a list, got {type(value).__name__} {value!r}"
+    elif kind in ("string_type", "str_type"):
+        message = f"{value!r} is not a text"
+    else:  # a pydantic message, with what was found
+        message = f"{value!r}: {error['msg'][0].lower()}{error['msg'][1:]}"
+    return InputError(message, source=source, field=_dotted(path) or None)
+
+
+def _document_path(document: Any, loc: tuple, keep_last: bool) -> tuple[str | int, ...]:
+    """The entries of pydantic's ``loc`` that index the document (union tags and ``[key]``
+    markers dropped); with ``keep_last`` the last entry is kept even if absent (a missing key)."""
+    path: list[str | int] = []
+    node = document
+    for k, part in enumerate(loc):
+        last = k == len(loc) - 1
+        if isinstance(node, Mapping) and part in node:
+            node = node[part]
+        elif isinstance(node, list | tuple) and isinstance(part, int) and part < len(node):
+            node = node[part]
+        elif not (keep_last and last):
+            continue
+        path.append(part)
+    return tuple(path)
+
+
+def _dotted(path: Sequence[str | int]) -> str:
+    text = ""
+    for part in path:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text
+
+
+def _field(schema: type[BaseModel], path: Sequence[str | int]) -> FieldInfo | None:
+    """The schema's field at ``path`` (through nested models, mappings and lists), if found."""
+    models: list[Any] = [schema]
+    found = None
+    for k, part in enumerate(path):
+        matches = [
+            field
+            for model in models
+            for name, field in (getattr(model, "model_fields", None) or {}).items()
+            if part in (name, field.alias)
+        ]
+        if matches:  # else: a mapping key or a list index, inside the same models
+            found = matches[0]
+            models = _nested_models(found.annotation)
+        elif k == len(path) - 1:
+            return None
+    return found
+
+
+def _nested_models(annotation: Any) -> list[Any]:
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return [annotation]
+    return [m for arg in getattr(annotation, "__args__", ()) for m in _nested_models(arg)]

@@ -1,0 +1,180 @@
+"""Parameter boxes: intervals on link inertial parameters, and the disturbance bound.
+
+A :class:`ParameterBox` holds one :class:`LinkBox` per uncertain link or payload, each in physical
+coordinates (``mass`` [kg], center of mass ``com_x, com_y, com_z`` in the link frame [m], rotational
+inertia about the center of mass in link-frame axes ``ixx, ixy, iyy, ixz, iyz, izz`` [kg m^2]) or in
+barycentric ones (the standard parameters about the link origin ``m, h_x, h_y, h_z, I_xx, I_xy,
+I_yy, I_xz, I_yz, I_zz`` with ``h = m c``, Pinocchio's order). Boxes are read from uncertainty files
+by :mod:`urpc.model.uncertainty`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+import pinocchio as pin
+
+from ..formats.uncertainty import BARYCENTRIC_FIELDS, PHYSICAL_FIELDS
+from .robot import Robot
+
+# PHYSICAL_FIELDS (mass, CoM in the link frame, inertia about the CoM in Pinocchio's component
+# order xx, xy, yy, xz, yz, zz) and BARYCENTRIC_FIELDS are the fields of the file format.
+UNITS = {
+    "mass": "kg", "com_x": "m", "com_y": "m", "com_z": "m",
+    "m": "kg", "h_x": "kg m", "h_y": "kg m", "h_z": "kg m",
+}  # fmt: skip
+
+Kind = Literal["physical", "barycentric"]
+
+
+def physical_coordinates(inertia: pin.Inertia) -> np.ndarray:
+    """``[mass, com_x, com_y, com_z, ixx, ixy, iyy, ixz, iyz, izz]`` of a spatial inertia."""
+    I = np.asarray(inertia.inertia)
+    c = np.asarray(inertia.lever)
+    return np.array(
+        [inertia.mass, c[0], c[1], c[2], I[0, 0], I[0, 1], I[1, 1], I[0, 2], I[1, 2], I[2, 2]]
+    )
+
+
+def inertia_from_physical(values: np.ndarray) -> pin.Inertia:
+    """The spatial inertia of physical coordinates (inverse of :func:`physical_coordinates`)."""
+    m, cx, cy, cz, ixx, ixy, iyy, ixz, iyz, izz = (float(v) for v in values)
+    tensor = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    return pin.Inertia(m, np.array([cx, cy, cz]), tensor)
+
+
+def barycentric_from_physical(values: np.ndarray) -> np.ndarray:
+    """Standard parameters ``[m, m c, I_O]`` (about the link origin) of physical coordinates."""
+    return np.asarray(inertia_from_physical(values).toDynamicParameters()).copy()
+
+
+@dataclass(frozen=True, eq=False)
+class LinkBox:
+    """The uncertain inertial parameters of one link (or payload), in its link frame.
+
+    Attributes:
+        link: URDF link name (or payload name).
+        kind: ``"physical"`` (coordinates :data:`PHYSICAL_FIELDS`) or ``"barycentric"``
+            (coordinates :data:`BARYCENTRIC_FIELDS`).
+        nominal: The nominal point, 10 coordinates of ``kind``.
+        lower, upper: The box, 10 coordinates of ``kind`` each; exact fields have lower == upper.
+    """
+
+    link: str
+    kind: Kind
+    nominal: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+
+    @property
+    def fields(self) -> tuple[str, ...]:
+        return PHYSICAL_FIELDS if self.kind == "physical" else BARYCENTRIC_FIELDS
+
+    @property
+    def uncertain(self) -> np.ndarray:
+        """Boolean mask of the coordinates with a non-zero width."""
+        return self.upper > self.lower
+
+    def inertia(self, values: np.ndarray) -> pin.Inertia:
+        """The spatial inertia (link frame) at a point given in this box's coordinates."""
+        if self.kind == "physical":
+            return inertia_from_physical(values)
+        return pin.Inertia.FromDynamicParameters(np.asarray(values, dtype=float))
+
+    def standard_parameters(self, values: np.ndarray) -> np.ndarray:
+        """Standard parameters (about the link origin, link frame) at a point of this box."""
+        if self.kind == "physical":
+            return barycentric_from_physical(values)
+        return np.asarray(values, dtype=float).copy()
+
+    @property
+    def nominal_inertia(self) -> pin.Inertia:
+        return self.inertia(self.nominal)
+
+
+@dataclass(frozen=True)
+class Payload:
+    """A rigid body fixed to a link whose parameters are uncertain (a tool, a grasped object)."""
+
+    name: str
+    link: str
+
+
+@dataclass(frozen=True, eq=False)
+class ParameterBox:
+    """Everything a controller may not know: link parameter intervals and the disturbance bound.
+
+    Attributes:
+        links: One :class:`LinkBox` per uncertain link or payload (others are exact).
+        payloads: Payload bodies, attached to their links by :meth:`nominal_robot`.
+        disturbance_bound: Bound on the input disturbance ``||d||`` [N m], or ``None`` when it is
+            unknown (the paper's Theorem 2 case).
+        source: The file the box was read from, if any.
+    """
+
+    links: tuple[LinkBox, ...]
+    payloads: tuple[Payload, ...] = ()
+    disturbance_bound: float | None = None
+    source: str | None = None
+    robot_name: str | None = field(default=None, compare=False)
+
+    def link_box(self, name: str) -> LinkBox:
+        for box in self.links:
+            if box.link == name:
+                return box
+        raise KeyError(name)
+
+    @property
+    def uncertain_links(self) -> tuple[LinkBox, ...]:
+        return tuple(b for b in self.links if b.uncertain.any())
+
+    def nominal_robot(self, robot: Robot) -> Robot:
+        """The controller's model: ``robot`` with every payload attached at its nominal point.
+
+        Idempotent: a robot that already carries the payloads is returned unchanged.
+        """
+        for payload in self.payloads:
+            if payload.name not in robot.link_names:
+                box = self.link_box(payload.name)
+                robot = robot.with_payload(payload.name, payload.link, box.nominal_inertia)
+        return robot
+
+    def plant(self, robot: Robot, point: Mapping[str, np.ndarray] | None = None) -> Robot:
+        """The robot at a parameter point (link or payload name -> coordinates of its box's kind);
+        links not named stay nominal. ``point=None`` gives the nominal robot."""
+        robot = self.nominal_robot(robot)
+        if not point:
+            return robot
+        boxed = {b.link: b for b in self.links}
+        inertias = {}
+        for name, values in point.items():
+            values = np.asarray(values, dtype=float)
+            # Links without a box are given in physical coordinates.
+            inertias[name] = (
+                boxed[name].inertia(values) if name in boxed else inertia_from_physical(values)
+            )
+        return robot.with_link_inertias(inertias)
+
+    def vertex(self, index: int) -> dict[str, np.ndarray]:
+        """The ``index``-th vertex of the box over the uncertain coordinates (bit ``k`` of
+        ``index`` picks lower (0) or upper (1) of the ``k``-th uncertain coordinate)."""
+        point, bit = {}, 0
+        for box in self.links:
+            values = box.nominal.copy()
+            for k in np.flatnonzero(box.uncertain):
+                values[k] = box.upper[k] if (index >> bit) & 1 else box.lower[k]
+                bit += 1
+            point[box.link] = values
+        return point
+
+    @property
+    def n_uncertain(self) -> int:
+        """Number of uncertain coordinates (the box has ``2 ** n_uncertain`` vertices)."""
+        return int(sum(int(b.uncertain.sum()) for b in self.links))
+
+    def sample(self, rng: np.random.Generator) -> dict[str, np.ndarray]:
+        """A point drawn uniformly from the box (not necessarily physically consistent)."""
+        return {b.link: rng.uniform(b.lower, b.upper) for b in self.links}

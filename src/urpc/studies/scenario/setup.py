@@ -1,0 +1,230 @@
+"""Building a scenario: the robot, the box, the true plant, the trajectory and the initial state.
+
+:func:`build` turns the settings of a :class:`~urpc.studies.scenario.settings.Scenario` into the
+objects a run needs (a :class:`ScenarioSetup`), checking what needs the robot (vector lengths,
+joint limits, link names) and naming the scenario file and the field in every error.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ...errors import InputError
+from ...model.inertia import inertia_problem
+from ...model.robot import Robot, load_robot
+from ...model.uncertainty import UNITS, ParameterBox, load_parameter_point, load_uncertainty
+from ...sim.trajectories import (
+    PaperTrajectory,
+    QuinticTrajectory,
+    SinusoidTrajectory,
+    Trajectory,
+    generic_trajectory,
+)
+from .settings import Scenario, TrajectorySpec
+
+
+@dataclass(frozen=True, eq=False)
+class ScenarioSetup:
+    """The objects a scenario describes, ready for synthesis and simulation.
+
+    Attributes:
+        scenario: The settings.
+        robot: The controller's nominal model (payloads of the box attached at their nominal).
+        box: The parameter box (the controller's knowledge).
+        plant: The true plant.
+        true_point: The true parameters (link -> coordinates of its box's kind; empty: nominal).
+        true_description: How the true parameters were chosen, for reports.
+        trajectory: The desired trajectory.
+        q0, qd0: The initial state [rad], [rad/s].
+        torque_limit: Per-joint torque bound [N m], or ``None``.
+    """
+
+    scenario: Scenario
+    robot: Robot
+    box: ParameterBox
+    plant: Robot
+    true_point: dict[str, np.ndarray]
+    true_description: str
+    trajectory: Trajectory
+    q0: np.ndarray
+    qd0: np.ndarray
+    torque_limit: np.ndarray | None
+
+
+def build(scenario: Scenario) -> ScenarioSetup:
+    """Load the robot and the box, make the true plant, the trajectory and the initial state.
+
+    Raises:
+        InputError: a setting that does not fit the robot (vector lengths, joint limits, an
+            unknown robot or link), naming the scenario file and the field.
+    """
+    source = None if scenario.source is None else str(scenario.source)
+    try:
+        robot = load_robot(scenario.robot, scenario.locked_joints)
+    except InputError as exc:
+        if exc.source is not None:
+            raise
+        raise InputError(exc.detail, source, exc.field or "robot") from None
+    box = load_uncertainty(scenario.uncertainty, robot)
+    nominal = box.nominal_robot(robot)
+    point, description = _true_point(scenario, robot, box, source)
+    plant = box.plant(robot, point)
+    trajectory = _trajectory(scenario.trajectory, nominal, source)
+    reference = trajectory.reference(0.0)
+    ic = scenario.initial_condition
+    q0 = reference.q + _fit(ic.offset, nominal.dof, source, "initial_condition.offset")
+    if ic.q0 is not None:
+        q0 = _fit(ic.q0, nominal.dof, source, "initial_condition.q0")
+    qd0 = reference.qd.copy()
+    if ic.qd0 is not None:
+        qd0 = _fit(ic.qd0, nominal.dof, source, "initial_condition.qd0")
+    limit = None
+    if scenario.torque_limit is not None:
+        limit = np.broadcast_to(
+            _fit(scenario.torque_limit, nominal.dof, source, "torque_limit"), (nominal.dof,)
+        ).copy()
+    return ScenarioSetup(
+        scenario, nominal, box, plant, point, description, trajectory, q0, qd0, limit
+    )
+
+
+def _fit(value: Any, dof: int, source: str | None, fieldname: str) -> np.ndarray:
+    """A per-joint vector from ``None`` (zeros), a scalar or ``dof`` numbers."""
+    if value is None:
+        return np.zeros(dof)
+    array = np.asarray(value, dtype=float)
+    if array.ndim == 0:
+        return np.full(dof, float(array))
+    if array.shape != (dof,):
+        raise InputError(
+            f"{array.tolist()} has {array.size} entries; the robot has {dof} joints",
+            source,
+            fieldname,
+        )
+    return array.copy()
+
+
+def _true_point(
+    scenario: Scenario, robot: Robot, box: ParameterBox, source: str | None
+) -> tuple[dict[str, np.ndarray], str]:
+    true = scenario.true_parameters
+    if true.kind == "file":
+        return load_parameter_point(true.file, robot, box), f"true parameters from {true.file}"
+    if true.kind == "nominal":
+        return {}, "true parameters = nominal parameters (no model error)"
+    seed = scenario.seed if true.seed is None else true.seed
+    point = sample_true_parameters(box, seed, source)
+    return point, (
+        f"true parameters drawn uniformly from the box (seed {seed}): " + describe_point(box, point)
+    )
+
+
+def describe_point(box: ParameterBox, point: Mapping[str, np.ndarray]) -> str:
+    """``link2: mass = 8.18 kg, com_x = 0.507 m, iyy = 1.17 kg m^2`` (uncertain fields only)."""
+    parts = []
+    for name, coordinates in point.items():
+        link_box = box.link_box(name)
+        fields = [
+            f"{field_name} = {coordinates[k]:.6g} {UNITS.get(field_name, 'kg m^2')}"
+            for k, field_name in enumerate(link_box.fields)
+            if link_box.uncertain[k]
+        ]
+        parts.append(f"{name}: {', '.join(fields) if fields else 'nominal'}")
+    return "; ".join(parts) if parts else "nominal"
+
+
+def sample_true_parameters(
+    box: ParameterBox, seed: int, source: str | None = None, tries: int = 1000
+) -> dict[str, np.ndarray]:
+    """A seeded uniform draw from ``box`` whose every link inertia is physically consistent.
+
+    Raises:
+        InputError: no consistent point found in ``tries`` draws.
+    """
+    rng = np.random.default_rng(seed)
+    for _ in range(tries):
+        point = box.sample(rng)
+        if all(
+            inertia_problem(np.asarray(box.link_box(name).inertia(values).inertia)) is None
+            and values[0] > 0
+            for name, values in point.items()
+        ):
+            return point
+    raise InputError(
+        f"no physically consistent point found in {tries} draws from the box; give a "
+        "true_parameters file",
+        source=source,
+        field="true_parameters",
+    )
+
+
+def _trajectory(spec: TrajectorySpec, robot: Robot, source: str | None) -> Trajectory:
+    options = dict(spec.options)
+    dof = robot.dof
+    try:
+        if spec.kind == "paper":
+            amplitude = options.get("amplitude", (math.pi / 4, -math.pi / 8))
+            if len(amplitude) != dof:
+                raise InputError(
+                    f"the paper trajectory needs one amplitude per joint ({dof}), got "
+                    f"{len(amplitude)}",
+                    source,
+                    "trajectory.amplitude",
+                )
+            trajectory = PaperTrajectory(amplitude)
+            reach = np.abs(trajectory.amplitude)
+            return _within_limits(trajectory, (-reach, reach), robot, source)
+        knobs = {
+            k: options.pop(k)
+            for k in ("home", "amplitude_fraction", "velocity_fraction", "segment_duration")
+            if k in options
+        }
+        if "home" in knobs:
+            knobs["home"] = _fit(knobs["home"], dof, source, "trajectory.home")
+        generic = generic_trajectory(robot, spec.kind, **knobs)
+        if spec.kind == "sinusoid":
+            assert isinstance(generic, SinusoidTrajectory)
+            values = {
+                key: _fit(options.get(key, getattr(generic, key)), dof, source, f"trajectory.{key}")
+                for key in ("amplitude", "frequency", "phase")
+            }
+            trajectory = SinusoidTrajectory(generic.home, **values)
+            reach = np.abs(trajectory.amplitude)
+            q_range = (trajectory.home - reach, trajectory.home + reach)
+        else:
+            if "points" not in options:
+                return generic
+            points = np.array(options["points"], dtype=float)
+            if points.ndim != 2 or points.shape[1] != dof:
+                raise InputError(
+                    f"each point needs {dof} joint values", source, "trajectory.points"
+                )
+            times = options.get("times")
+            if times is None:
+                step = knobs.get("segment_duration", 2.0)
+                times = step * np.arange(len(points))
+            trajectory = QuinticTrajectory(points, times)
+            q_range = (points.min(axis=0), points.max(axis=0))
+    except InputError as exc:
+        if exc.source is not None or (exc.field or "").startswith("trajectory"):
+            raise
+        raise InputError(
+            exc.detail, source, f"trajectory.{exc.field}" if exc.field else "trajectory"
+        ) from None
+    return _within_limits(trajectory, q_range, robot, source)
+
+
+def _within_limits(
+    trajectory: Trajectory, q_range: tuple, robot: Robot, source: str | None
+) -> Trajectory:
+    lower, upper = robot.position_limits
+    outside = np.flatnonzero((q_range[0] < lower) | (q_range[1] > upper))
+    if outside.size:
+        names = ", ".join(robot.joint_names[j] for j in outside)
+        raise InputError(f"the trajectory leaves the joint limits of {names}", source, "trajectory")
+    return trajectory
