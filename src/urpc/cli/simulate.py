@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from ..control import SAMPLED_LAWS
 from ..errors import InputError
 from .common import EXIT_OK, names, positive_float, print_json
 
@@ -23,47 +24,7 @@ def register(commands) -> None:
         "--json prints them as one object; --out DIR saves result.npz, result.csv, summary.json, "
         "scenario.yaml and the figures (PNG).",
     )
-    p.add_argument(
-        "scenario",
-        nargs="?",
-        help="scenario YAML file or shipped name (rr_planar/s1_ic1 ...); omit with --robot",
-    )
-    source = p.add_argument_group("robot and knowledge (replace or stand in for a scenario file)")
-    source.add_argument("--robot", help="URDF path or robot name (rr_planar, ur5, panda, ...)")
-    source.add_argument(
-        "--lock", type=names, metavar="JOINTS", help="comma-separated joints to lock (at 0)"
-    )
-    source.add_argument(
-        "--uncertainty",
-        "-u",
-        metavar="FILE",
-        help="uncertainty YAML file (default for a robot known by name: its shipped box)",
-    )
-    source.add_argument(
-        "--true-params",
-        metavar="FILE",
-        help="true parameter point file, 'sample' (seeded draw from the box) or 'nominal'",
-    )
-    run = p.add_argument_group("run settings")
-    run.add_argument("--controller", help="interval (default), r-alpha or computed-torque")
-    run.add_argument(
-        "--method", help="bound method of the interval controller: vertex, hull, rigorous"
-    )
-    run.add_argument("--plant", help="plant backend: pinocchio (default) or mujoco (sampled runs)")
-    run.add_argument("--epsilon", metavar="E", help="required precision ||q_d - q|| < E [rad]")
-    timing = run.add_mutually_exclusive_group()
-    timing.add_argument("--sample-period", metavar="T", help="control period [s] (zero-order hold)")
-    timing.add_argument("--continuous", action="store_true", help="continuous-time control")
-    run.add_argument(
-        "--disturbance",
-        metavar="D",
-        help="bound on ||d|| [N m], drawn per sample, unknown to the controller",
-    )
-    run.add_argument("--duration", metavar="S", help="simulated time [s]")
-    run.add_argument("--seed", type=int, help="seed of the disturbance and of a sampled plant")
-    run.add_argument(
-        "--torque-limit", metavar="TAU", help="torque bound [N m]: one number or one per joint"
-    )
+    add_scenario_arguments(p)
     output = p.add_argument_group("output")
     output.add_argument("--out", type=Path, metavar="DIR", help="save result files and figures")
     output.add_argument("--json", action="store_true", help="print one JSON object")
@@ -97,6 +58,62 @@ def register(commands) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object (results.json)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(handler=run_reproduce_paper)
+
+
+def add_scenario_arguments(p, simulate: bool = True) -> None:
+    """The scenario and its overrides, shared by ``simulate`` and ``certify``; ``simulate=False``
+    leaves out what only a run needs (true plant, controller, plant backend, seed, torque limit)."""
+    p.add_argument(
+        "scenario",
+        nargs="?",
+        help="scenario YAML file or shipped name (rr_planar/s1_ic1 ...); omit with --robot",
+    )
+    source = p.add_argument_group("robot and knowledge (replace or stand in for a scenario file)")
+    source.add_argument("--robot", help="URDF path or robot name (rr_planar, ur5, panda, ...)")
+    source.add_argument(
+        "--lock", type=names, metavar="JOINTS", help="comma-separated joints to lock (at 0)"
+    )
+    source.add_argument(
+        "--uncertainty",
+        "-u",
+        metavar="FILE",
+        help="uncertainty YAML file (default for a robot known by name: its shipped box)",
+    )
+    run = p.add_argument_group("run settings")
+    run.add_argument(
+        "--method", help="bound method of the interval controller: vertex, hull, rigorous"
+    )
+    run.add_argument(
+        "--sampled-law",
+        choices=SAMPLED_LAWS,
+        help="law of a sampled interval controller: implicit (default, certified by urpc "
+        "certify) or paper (the paper's law unchanged; it can diverge on light plants at "
+        "0.5-1 kHz)",
+    )
+    run.add_argument("--epsilon", metavar="E", help="required precision ||q_d - q|| < E [rad]")
+    timing = run.add_mutually_exclusive_group()
+    timing.add_argument("--sample-period", metavar="T", help="control period [s] (zero-order hold)")
+    timing.add_argument("--continuous", action="store_true", help="continuous-time control")
+    run.add_argument(
+        "--disturbance",
+        metavar="D",
+        help="bound on ||d|| [N m], drawn per sample, unknown to the controller",
+    )
+    run.add_argument("--duration", metavar="S", help="simulated time [s]")
+    if not simulate:
+        p.set_defaults(true_params=None, controller=None, plant=None, seed=None, torque_limit=None)
+        return
+    source.add_argument(
+        "--true-params",
+        metavar="FILE",
+        help="true parameter point file, 'sample' (seeded draw from the box) or 'nominal'",
+    )
+    run.add_argument("--controller", help="interval (default), r-alpha or computed-torque")
+    run.add_argument("--plant", help="plant backend: pinocchio (default) or mujoco (sampled runs)")
+    run.add_argument("--seed", type=int, help="seed of the disturbance and of a sampled plant")
+    run.add_argument(
+        "--torque-limit", metavar="TAU", help="torque bound [N m]: one number or one per joint"
+    )
 
 
 # ============================================================================== simulate
@@ -173,7 +190,9 @@ def scenario_from_arguments(args):
     torque_limit = args.torque_limit
     if torque_limit is not None and "," in torque_limit:
         torque_limit = names(torque_limit)
-    options = None if args.method is None else {"interval": {"method": args.method}}
+    interval = {"method": args.method, "sampled_law": args.sampled_law}
+    interval = {key: value for key, value in interval.items() if value is not None}
+    options = {"interval": interval} if interval else None
     return scenario.with_overrides(
         robot=args.robot if args.scenario is not None else None,
         locked_joints=args.lock,

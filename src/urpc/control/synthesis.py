@@ -17,10 +17,8 @@ from ..errors import InputError
 from ..model.inertia_bounds import InertiaBounds
 from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
+from . import SAMPLED_LAWS
 from .interval import IntervalPassivityController
-
-#: The laws a sampled controller can run: ``implicit`` (certified) or ``paper`` (unchanged).
-SAMPLED_LAWS = ("implicit", "paper")
 
 
 def synthesize(
