@@ -13,7 +13,7 @@ from pydantic import Field, model_validator
 
 from .base import FieldError, FileFormat
 from .uncertainty import LinkEntry, PhysicalPoint
-from .values import NonNegative, Number, Positive, Text, Vector3
+from .values import Number, Positive, Text, Vector3
 
 ModuleKind = Literal["base", "actuator", "link", "tool", "payload"]
 
@@ -91,7 +91,7 @@ class Shape(FileFormat):
 class Inertial(PhysicalPoint):
     """Nominal physical parameters in the module frame (fields other than mass default to 0)."""
 
-    mass: NonNegative("kg") = Field(description="nominal mass [kg]")
+    mass: Number = Field(description="nominal mass [kg]: > 0, >= 0 for a payload")
 
 
 _FRAMES = {
@@ -105,7 +105,9 @@ class ModuleFile(FileFormat):
     """A module file ``<name>.yaml`` of a module library."""
 
     name: Text | None = Field(None, description="the module name; must equal the file stem")
-    kind: ModuleKind = Field(description="base, actuator, link, tool or payload")
+    kind: ModuleKind = Field(
+        title="module kind", description="base, actuator, link, tool or payload"
+    )
     description: Text = Field("", description="free text")
     shape: Shape | None = Field(None, description="geometry for drawings")
     inertial: Inertial = Field(description="nominal inertial parameters, module frame")
@@ -119,11 +121,12 @@ class ModuleFile(FileFormat):
     @model_validator(mode="after")
     def _fits_kind(self) -> ModuleFile:
         kind = self.kind
+        a_kind = f"{'an' if kind[0] in 'aeiou' else 'a'} {kind}"
         for key, (needed, why) in _FRAMES.items():
             if needed(kind) and getattr(self, key) is None:
-                raise FieldError(key, f"a {kind} module needs '{key}' ({why})")
+                raise FieldError(key, f"{a_kind} module needs '{key}' ({why})")
             if not needed(kind) and getattr(self, key) is not None:
-                raise FieldError(key, f"a {kind} module has no '{key}' ({why})")
+                raise FieldError(key, f"{a_kind} module has no '{key}' ({why})")
         if kind == "base" and self.uncertainty is not None and self.uncertainty.entries():
             raise FieldError(
                 "uncertainty",
