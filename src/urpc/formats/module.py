@@ -139,6 +139,10 @@ class ModuleFile(FileFormat):
                 "a payload box is physical (mass, com_*, i**): it becomes the uncertainty file's "
                 "payload entry, which has no barycentric form",
             )
-        if kind != "payload" and self.inertial.mass == 0:
-            raise FieldError(("inertial", "mass"), f"a {kind} module needs a mass > 0 [kg]; got 0")
+        mass, payload = self.inertial.mass, kind == "payload"
+        if mass < 0 or (mass == 0 and not payload):
+            raise FieldError(
+                ("inertial", "mass"),
+                f"{a_kind} module needs a mass {'>= 0' if payload else '> 0'} [kg]; got {mass:g}",
+            )
         return self
