@@ -8,7 +8,7 @@ period ``T`` with the implicit law of :mod:`urpc.control.interval`, the argument
     ||z+|| <= (1 - a + b) ||z|| + T c
 
     a = beta D T / (D T + beta lambda_U)            contraction of the implicit feedback
-    b = T (1 + nu) (K + Gamma v)                     Kr and Coriolis terms, proportional to r
+    b = T (K (1/2 + nu) + (1 + nu) Gamma v)          Kr and Coriolis terms, proportional to r
     c = W + d / sqrt(lambda_L) + T G / 2              mismatch, disturbance, drift
 
 with ``lambda_L = lambda_min(M_L)``, ``lambda_U = lambda_max(M_U)``, ``beta`` the relative tightness
@@ -201,13 +201,15 @@ def _sampled_conditions(
             "the box's inertia bounds are vacuous: narrow the mass/inertia intervals",
         ),
         Condition(
-            "contraction a exceeds the perturbation b", figures["margin"] > 0,
+            "contraction a exceeds the perturbation b (at r = 0)", figures["margin"] > 0,
             figures["margin"], 0.0,
             "shorten the sample period or lower Kr (b grows with T Kr and T |qd|)",
         ),
         Condition(
             "ultimate bound below epsilon", floor <= epsilon, floor, epsilon,
-            f"raise epsilon to {floor:.3g} rad or shorten the period to {max_period:.3g} s",
+            (f"raise epsilon to {floor:.3g} rad or shorten" if math.isfinite(floor)
+             else "no epsilon is guaranteed at this period: shorten")
+            + f" the period to {max_period:.3g} s",
         ),
     ]  # fmt: skip
 
@@ -322,32 +324,34 @@ class _Grid:
         cw = W + d / sqrt_L + 0.5 * T * self.drift
         r_sup = 0.0
         for _ in range(50):
-            b = T * (1.0 + self.nu) * (self.K + self.gamma * (speed + r_sup))
+            b = T * (self.K * (0.5 + self.nu) + (1.0 + self.nu) * self.gamma * (speed + r_sup))
             margin = float(np.min(a - b))
+            if r_sup == 0.0:
+                parts = {"contraction": float(np.min(a)), "margin": margin, "gain_D": float(D)}
             if not margin > 0:
-                return math.inf, {"contraction": float(np.min(a)), "margin": margin}
+                return math.inf, parts
             z = T * cw.max() / margin
             new = (z + T * cw.max()) / sqrt_L.min()
             if abs(new - r_sup) <= 1e-6 * new:
                 break
             r_sup = new
-        parts = {"contraction": float(np.min(a)), "margin": margin, "r_sup": float(new),
-                 "mismatch_W": float(W.max()), "gain_D": float(D)}  # fmt: skip
+        parts.update(r_sup=float(new), mismatch_W=float(W.max()))
         return float(new / self.Kr.min()), parts
 
     def floor(self, T: float, d: float, epsilon: float) -> tuple[float, dict]:
-        """The smallest tube radius that reproduces itself (fixed point from ``tube = 0``)."""
+        """The smallest tube radius that reproduces itself (fixed point from ``tube = 0``), and
+        the parts of the bound (at that tube, or at ``epsilon`` when there is none)."""
         if not np.all(self.lam_L > 0) or not math.isfinite(d):
             return math.inf, {"margin": -math.inf}
-        tube, parts = 0.0, {}
+        tube = 0.0
         for _ in range(30):
             floor, parts = self._floor_at(T, d, tube, self.mismatch(tube))
             if not math.isfinite(floor) or floor > 1e3 * max(epsilon, 1e-9):
-                return math.inf, parts or {"margin": -math.inf}
+                break
             if floor <= tube * (1 + 1e-3):
                 return tube, parts
             tube = floor * 1.001
-        return math.inf, parts
+        return math.inf, self._floor_at(T, d, epsilon, self.mismatch(epsilon))[1]
 
     def max_sample_period(self, epsilon: float, d: float) -> float:
         """The largest ``T`` with ``floor(T) <= epsilon`` in the tube ``||e|| <= epsilon``."""
