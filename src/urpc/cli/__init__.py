@@ -13,10 +13,10 @@ import sys
 from collections.abc import Sequence
 
 from ..errors import UrpcError
-from . import bench, campaign, certify, demo, inspect, simulate
+from . import bench, campaign, certify, demo, init, inspect, simulate
 from .common import EXIT_INPUT, EXIT_OK, Parser, one_line
 
-COMMAND_MODULES = [inspect, simulate, certify, demo, campaign, bench]
+COMMAND_MODULES = [inspect, init, simulate, certify, demo, campaign, bench]
 
 
 def build_parser() -> argparse.ArgumentParser:
