@@ -180,7 +180,8 @@ def scenario_from_arguments(args):
         )
     elif uncertainty is None:
         raise InputError(
-            f"robot '{args.robot}' has no shipped uncertainty box; give --uncertainty FILE "
+            f"robot '{args.robot}' has no shipped uncertainty box; write one with "
+            f"'urpc init {args.robot} --out box.yaml' and give --uncertainty box.yaml "
             "(format: docs/uncertainty-format.md)",
             field="uncertainty",
         )
