@@ -175,8 +175,7 @@ def shipped_file(source: str | Path, default: str, what: str = "file") -> Path:
             f"name of a robot that ships its {what}: " + did_you_mean(robot, shipped),
             source=text,
         )
-    data = shipped_data(robot)
-    files = [p.stem for p in (*data["uncertainty"], *data["parameter_points"])]
+    files = [p.stem for p in shipped_data(robot)["parameter_points"]]
     if stem == "uncertainty":
         hint = f"write one with 'urpc init {robot} --out box.yaml' and give its path"
     elif files:

@@ -44,6 +44,7 @@ from ..formats.uncertainty import (
     UncertaintyFile,
 )
 from ..formats.values import Interval
+from .catalog import shipped_file
 from .inertia import inertia_problem
 from .parameter_box import (
     UNITS,
@@ -78,13 +79,14 @@ __all__ = [
 # ============================================================================ loading
 def load_uncertainty(path: str | Path, robot: Robot) -> ParameterBox:
     """Read and validate an uncertainty file (:class:`urpc.formats.uncertainty.UncertaintyFile`)
-    for ``robot``.
+    for ``robot``: a path, or a robot name for its shipped box (``"rr_planar"``).
 
     Raises:
         InputError: naming the file and the field, for: malformed YAML, an unknown key or link,
             a wrong type, lo > hi, a non-positive mass, a nominal outside its box, a
             non-physical nominal inertia.
     """
+    path = shipped_file(path, "uncertainty.yaml", "uncertainty box")
     return parse_uncertainty(read_yaml(path), robot, source=str(path))
 
 
@@ -226,7 +228,8 @@ def load_parameter_point(
     path: str | Path, robot: Robot, box: ParameterBox
 ) -> dict[str, np.ndarray]:
     """Read a parameter-point file (:class:`urpc.formats.parameter_point.ParameterPointFile`, a
-    true plant) for ``robot`` and ``box``.
+    true plant) for ``robot`` and ``box``: a path, or a shipped name (``"rr_planar"`` for its
+    ``true_parameters.yaml``, ``"ur5/heavy_payload"``).
 
     The file uses the names of the uncertainty format, with single numbers::
 
@@ -238,6 +241,7 @@ def load_parameter_point(
     (in the kind of that link's box, physical for links without a box), for
     :meth:`ParameterBox.plant`.
     """
+    path = shipped_file(path, "true_parameters.yaml", "parameter point")
     source = str(path)
     spec = validate(ParameterPointFile, read_yaml(path), source)
     nominal_robot = box.nominal_robot(robot)
