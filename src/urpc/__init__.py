@@ -3,28 +3,47 @@
 The main entry points::
 
     robot = urpc.load_robot("rr_planar")                    # Pinocchio model + per-link data
-    box = urpc.load_uncertainty("uncertainty.yaml", robot)   # the parameter box
+    box = urpc.load_uncertainty("rr_planar", robot)         # the parameter box (file or name)
+    scenario = urpc.load_scenario("rr_planar/s2_ic1")       # a scenario (file or shipped name)
     bound = urpc.make_bound("vertex", robot, box)            # enclosure of the mismatch torque
+
+``import urpc`` is cheap: each public name is imported from its module on first use (module
+``__getattr__``, PEP 562), so a command line or a script pays for Pinocchio, SciPy and numba only
+when it touches a name that needs them.
 """
 
-from .bounds import METHODS as BOUND_METHODS
-from .bounds import BoundMethod, default_method, make_bound
-from .control.interval import IntervalPassivityController
-from .control.synthesis import synthesize
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
 from .errors import InputError, SimulationError, UrpcError
-from .model.modular import Assembly, assemble, load_assembly, load_module_library
-from .model.robot import Robot, load_robot
-from .model.uncertainty import (
-    ParameterBox,
-    load_parameter_point,
-    load_uncertainty,
-    parse_uncertainty,
-)
-from .sim.metrics import METRIC_NAMES
-from .sim.results import SimulationResult
-from .sim.simulation import simulate
 
 __version__ = "0.1.0"
+
+#: Public name -> (module relative to this package, attribute in that module).
+_LAZY = {
+    "BOUND_METHODS": (".bounds", "METHODS"),
+    "BoundMethod": (".bounds", "BoundMethod"),
+    "default_method": (".bounds", "default_method"),
+    "make_bound": (".bounds", "make_bound"),
+    "IntervalPassivityController": (".control.interval", "IntervalPassivityController"),
+    "synthesize": (".control.synthesis", "synthesize"),
+    "Assembly": (".model.modular", "Assembly"),
+    "assemble": (".model.modular", "assemble"),
+    "load_assembly": (".model.modular", "load_assembly"),
+    "load_module_library": (".model.modular", "load_module_library"),
+    "Robot": (".model.robot", "Robot"),
+    "load_robot": (".model.robot", "load_robot"),
+    "ParameterBox": (".model.uncertainty", "ParameterBox"),
+    "load_parameter_point": (".model.uncertainty", "load_parameter_point"),
+    "load_uncertainty": (".model.uncertainty", "load_uncertainty"),
+    "parse_uncertainty": (".model.uncertainty", "parse_uncertainty"),
+    "METRIC_NAMES": (".sim.metrics", "METRIC_NAMES"),
+    "SimulationResult": (".sim.results", "SimulationResult"),
+    "simulate": (".sim.simulation", "simulate"),
+    "load_scenario": (".studies.scenario", "load_scenario"),
+}
 
 __all__ = [
     "BOUND_METHODS",
@@ -50,4 +69,39 @@ __all__ = [
     "assemble",
     "load_assembly",
     "load_module_library",
+    "load_scenario",
 ]
+
+
+def __getattr__(name: str):
+    """Import a public name from its module on first access, then cache it in the package."""
+    try:
+        module_name, attribute = _LAZY[name]
+    except KeyError:
+        raise AttributeError(f"module 'urpc' has no attribute '{name}'") from None
+    value = getattr(importlib.import_module(module_name, __name__), attribute)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
+
+if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
+    from .bounds import METHODS as BOUND_METHODS
+    from .bounds import BoundMethod, default_method, make_bound
+    from .control.interval import IntervalPassivityController
+    from .control.synthesis import synthesize
+    from .model.modular import Assembly, assemble, load_assembly, load_module_library
+    from .model.robot import Robot, load_robot
+    from .model.uncertainty import (
+        ParameterBox,
+        load_parameter_point,
+        load_uncertainty,
+        parse_uncertainty,
+    )
+    from .sim.metrics import METRIC_NAMES
+    from .sim.results import SimulationResult
+    from .sim.simulation import simulate
+    from .studies.scenario import load_scenario
