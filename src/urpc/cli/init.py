@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import tempfile
 from pathlib import Path
 
 from ..errors import InputError
@@ -167,6 +166,8 @@ def write_new_file(path: Path, text: str, overwrite: bool = False) -> None:
     Raises:
         InputError: the file exists (without ``overwrite``), or cannot be written.
     """
+    import tempfile
+
     folder = path.parent if str(path.parent) else Path(".")
     try:
         descriptor, temporary = tempfile.mkstemp(prefix=f".{path.name}.", dir=folder)
