@@ -306,12 +306,6 @@ def _checked(scenario: Scenario, source: str | None) -> Scenario:
     def error(message: str, fieldname: str) -> InputError:
         return InputError(message, source=source, field=fieldname)
 
-    if scenario.controller not in CONTROLLERS:
-        raise error(
-            f"unknown controller '{scenario.controller}'; "
-            + did_you_mean(scenario.controller, CONTROLLERS),
-            "controller",
-        )
     if scenario.sample_period is not None and scenario.sample_period > scenario.duration:
         raise error(
             f"the sample period {scenario.sample_period:g} s is longer than the duration "
