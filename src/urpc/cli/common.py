@@ -6,10 +6,12 @@ import argparse
 import json
 import math
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from ..errors import InputError
+
+if TYPE_CHECKING:  # numpy is imported when a command needs it (start-up time of the CLI)
+    import numpy as np
 
 EXIT_OK = 0
 EXIT_INPUT = 2
@@ -24,6 +26,8 @@ class Parser(argparse.ArgumentParser):
 
 def vector(text: str) -> np.ndarray:
     """Parse ``"0.1,0.2"`` or ``"0.1 0.2"`` into a float vector (NaN/inf rejected)."""
+    import numpy as np
+
     parts = [p for p in text.replace(",", " ").split() if p]
     try:
         values = np.array([float(p) for p in parts])
@@ -116,6 +120,8 @@ def print_json(payload: dict) -> None:
 
 
 def jsonable(value):
+    import numpy as np
+
     if isinstance(value, dict):
         return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
