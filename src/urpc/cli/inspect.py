@@ -43,30 +43,69 @@ def register(commands) -> None:
 
 
 def run_robots(args) -> int:
-    from ..model.catalog import builtin_robots, example_robot_data_robots
+    from ..model.catalog import builtin_robots, example_robot_data_robots, shipped_data
 
     builtin = builtin_robots()
     erd = example_robot_data_robots()
+    known = {**erd, **builtin}
+    shipped = {}
+    for name in sorted(known):
+        data = shipped_data(name)
+        if any(data.values()):
+            shipped[name] = (known[name], data)
+    supported = {n: e for n, e in erd.items() if not e.floating_base}
+    floating = {n: e for n, e in erd.items() if e.floating_base}
     if args.json:
         print_json(
             {
                 "builtin": {n: str(e.urdf) for n, e in builtin.items()},
-                "example_robot_data": {n: str(e.urdf) for n, e in erd.items()},
+                "example_robot_data": {n: str(e.urdf) for n, e in supported.items()},
+                "shipped": {
+                    name: {
+                        "urdf": str(entry.urdf),
+                        "origin": entry.origin,
+                        "uncertainty": [str(p) for p in data["uncertainty"]],
+                        "parameter_points": [f"{name}/{p.stem}" for p in data["parameter_points"]],
+                        "scenarios": [f"{name}/{p.stem}" for p in data["scenarios"]],
+                    }
+                    for name, (entry, data) in shipped.items()
+                },
+                "not_supported": {
+                    n: {"urdf": str(e.urdf), "reason": "floating base"} for n, e in floating.items()
+                },
             }
         )
         return EXIT_OK
-    print("Built-in robots (with their uncertainty and parameter files):")
-    for name, entry in builtin.items():
-        extras = ", ".join(p.name for p in entry.files)
-        print(f"  {name:<24} {extras}")
-    print("\nexample-robot-data URDFs (loaded as fixed-base trees; a URDF with a joint type other")
-    print("than revolute, continuous, prismatic or fixed is refused with a message naming it):")
-    names = list(erd)
+    print("Robots with a shipped uncertainty box, true plants and scenarios:")
+    print(f"  {'name':<11} {'URDF from':<19} {'box':<4} {'true plants':<28} scenarios")
+    for name, (entry, data) in shipped.items():
+        box = "yes" if data["uncertainty"] else "no"
+        points = ", ".join(p.stem for p in data["parameter_points"]) or "-"
+        scenarios = ", ".join(f"{name}/{p.stem}" for p in data["scenarios"]) or "-"
+        print(f"  {name:<11} {entry.origin:<19} {box:<4} {points:<28} {scenarios}")
+    print(
+        "  (urpc check NAME; urpc simulate NAME/SCENARIO; the API loads them by name too: "
+        "urpc.load_uncertainty(NAME, robot))"
+    )
+    print(
+        "\nFixed-base robots of example-robot-data, without a shipped box ('urpc init NAME --out "
+        "box.yaml'\nwrites one; a joint type other than revolute, continuous, prismatic or fixed "
+        "is refused):"
+    )
+    _print_columns([n for n in supported if n not in shipped])
+    print(
+        "\nNot supported: floating-base robots of example-robot-data (legged, humanoid, aerial, "
+        "mobile;\nurpc controls fixed-base arms):"
+    )
+    _print_columns(list(floating))
+    return EXIT_OK
+
+
+def _print_columns(names: list[str]) -> None:
     width = max((len(n) for n in names), default=0) + 2
     per_line = max(1, 96 // width)
     for i in range(0, len(names), per_line):
-        print("  " + "".join(n.ljust(width) for n in names[i : i + per_line]))
-    return EXIT_OK
+        print("  " + "".join(n.ljust(width) for n in names[i : i + per_line]).rstrip())
 
 
 def load_robot_and_box(args):
@@ -119,16 +158,26 @@ def run_check(args) -> int:
     if args.json:
         print_json(summary)
         return EXIT_OK
-    print(f"robot       {robot.name} ({robot.dof} dof) from {robot.urdf_path}")
-    print(f"joints      {', '.join(robot.joint_names)}")
-    print(f"uncertainty {path if path else '(none: every parameter exact)'}")
+    print(f"robot        {robot.name} ({_count(robot.dof, 'joint')}) from {robot.urdf_path}")
+    print(f"joints       {', '.join(robot.joint_names)}")
+    print(f"moving links {', '.join(robot.moving_link_names)}")
+    if path is None:
+        print(
+            f"uncertainty  none: there is no shipped box for {args.robot}; write one with "
+            f"'urpc init {args.robot} --out box.yaml' and check it with --uncertainty box.yaml"
+        )
+        return EXIT_OK
+    print(f"uncertainty  {path}")
     dist = summary["disturbance"]
     print(
-        f"disturbance {'unknown bound (Theorem 2, adaptive gains)' if dist == 'unknown' else f'||d|| <= {dist} N m (Theorem 1)'}"
+        f"disturbance  {'unknown bound (Theorem 2, adaptive gains)' if dist == 'unknown' else f'||d|| <= {dist} N m (Theorem 1)'}"
     )
     for payload in box.payloads:
-        print(f"payload     '{payload.name}' fixed to link '{payload.link}'")
-    print(f"uncertain   {box.n_uncertain} parameters in {len(box.uncertain_links)} links\n")
+        print(f"payload      '{payload.name}' fixed to link '{payload.link}'")
+    print(
+        f"uncertain    {_count(box.n_uncertain, 'parameter')} in "
+        f"{_count(len(box.uncertain_links), 'link')}\n"
+    )
     header = f"  {'field':<8} {'nominal':>12} {'lower':>12} {'upper':>12} {'rel. width':>11}"
     for entry in summary["links"]:
         print(f"link '{entry['link']}' ({entry['kind']} box)")
@@ -146,6 +195,10 @@ def run_check(args) -> int:
             print(f"  exact: {', '.join(exact)}")
         print()
     return EXIT_OK
+
+
+def _count(number: int, noun: str) -> str:
+    return f"{number} {noun}" + ("" if number == 1 else "s")
 
 
 def run_bound(args) -> int:
