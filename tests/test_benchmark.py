@@ -104,5 +104,5 @@ def test_profile_control_step_parts():
     times = profile["rr_planar"]
     for part in ("output", "regressor", "bound", "nominal", "arithmetic", "rnea"):
         assert _positive_finite(times[part])
-    assert "gain_limit" not in times  # the RR arm's scenario runs the paper's law
+    assert "sampled_law" not in times  # the RR arm's scenario runs the paper's law
     assert "rr_planar" in format_profile(profile)

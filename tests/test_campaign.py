@@ -237,18 +237,22 @@ def test_cli_campaign_json(capsys, tmp_path):
     )  # fmt: skip
     captured = capsys.readouterr()
     summary = json.loads(captured.out)
-    assert code == 0 and captured.err == ""
+    # The shipped s3 runs the paper's law: one line says it is not certified, nothing else.
+    assert code == 0 and captured.err.startswith("warning: NOT certified (paper law")
+    assert len(captured.err.splitlines()) == 1
+    assert summary["certified"] is False and summary["certificate"]["law"] == "paper"
     assert SUMMARY_KEYS <= set(summary) and summary["out"] == str(out)
     assert summary["runs"] == 3 and summary["duration"] == 0.1 and summary["vertex_runs"] == 1
     assert (out / RUNS_NAME).is_file()
-    assert summary["controller_options"]["sampled_gain_limit"] is False  # the paper's law
+    assert summary["controller_options"]["sampled_law"] == "paper"
     code = main(["campaign", "rr_planar/s3_ic1", "--runs", "1", "--duration", "0.05",
                  "--workers", "1", "--out", str(out), "--no-progress",
-                 "--sampled-gain-limit", "on"])  # fmt: skip
+                 "--sampled-law", "implicit"])  # fmt: skip
     captured = capsys.readouterr()
     assert code == 0 and "met epsilon" in captured.out and "runs/min" in captured.out
     summary = json.loads((out / SUMMARY_NAME).read_text())
-    assert summary["runs"] == 1 and summary["controller_options"]["sampled_gain_limit"] is True
+    assert summary["runs"] == 1 and summary["controller_options"]["sampled_law"] == "implicit"
+    assert summary["certificate"]["law"] == "implicit"
 
 
 @pytest.mark.parametrize(
@@ -263,7 +267,7 @@ def test_cli_campaign_json(capsys, tmp_path):
         (["--runs", "2", "--ic-spread", "-1"], "--ic-spread"),
         (["--runs", "2", "--duration", "-1"], "duration"),
         (["--runs", "2", "--plant", "bullet"], "--plant"),
-        (["--runs", "2", "--sampled-gain-limit", "yes"], "--sampled-gain-limit"),
+        (["--runs", "2", "--sampled-law", "yes"], "--sampled-law"),
         ([], "--runs"),
     ],
 )

@@ -22,7 +22,10 @@ from urpc.sim.metrics import METRIC_NAMES
 from urpc.sim.results import SimulationResult
 from urpc.studies.scenario import build, load_scenario, run_scenario, sample_true_parameters
 
-SUMMARY_KEYS = {*METRIC_NAMES, "epsilon", "controller", "scenario", "plant", "true_parameters"}
+SUMMARY_KEYS = {
+    *METRIC_NAMES, "epsilon", "controller", "scenario", "plant", "true_parameters",
+    "certified", "not_certified", "certificate",
+}  # fmt: skip
 TIMINGS = ("step_time_median", "wall_time")
 
 
@@ -35,7 +38,8 @@ def _run(capsys, *argv):
 def _json(capsys, *argv) -> dict:
     code, out, err = _run(capsys, *argv, "--json")
     assert code == 0, err
-    assert err == ""  # no progress bar when stderr is not a terminal
+    # No progress bar when stderr is not a terminal; only warnings (e.g. "not certified").
+    assert all(line.startswith("warning: ") for line in err.splitlines()), err
     return json.loads(out)  # exactly one JSON object
 
 
@@ -44,6 +48,9 @@ def test_shipped_scenario_json_matches_an_in_process_run(capsys):
     assert set(summary) == SUMMARY_KEYS
     assert summary["controller"] == "interval" and summary["epsilon"] == 0.01
     assert summary["scenario"] == "s3_ic2" and summary["plant"] == "pinocchio"
+    # The shipped s3 runs the paper's law (the reproduction): not certified, and it says why.
+    assert summary["certified"] is False and "paper law" in summary["not_certified"]
+    assert summary["true_parameters"]["inside_box"] is True
     assert summary["true_parameters"]["values"] == {
         "link2": {"mass": 10.0, "com_x": 0.525, "iyy": pytest.approx(20 / 12)}
     }
@@ -72,12 +79,13 @@ def test_out_writes_result_files_and_figures(capsys, tmp_path):
     code, text, err = _run(
         capsys, "simulate", "rr_planar/s3_ic1", "--duration", "0.3", "--out", out
     )
-    assert code == 0 and err == ""
+    assert code == 0 and err.startswith("warning: NOT certified") and len(err.splitlines()) == 1
     assert "MET" in text and f"saved        {out}" in text
     assert sorted(p.name for p in out.iterdir()) == [
-        "error.png", "result.csv", "result.npz", "scenario.yaml", "summary.json",
-        "torque.png", "trajectory.png",
+        "certificate.json", "error.png", "result.csv", "result.npz", "scenario.yaml",
+        "summary.json", "torque.png", "trajectory.png",
     ]  # fmt: skip
+    assert json.loads((out / "certificate.json").read_text())["certified"] is False
     for name in ("error.png", "torque.png", "trajectory.png"):
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     loaded = SimulationResult.load(out)
@@ -101,8 +109,9 @@ def test_out_is_all_or_nothing(capsys, tmp_path, monkeypatch):
     code, text, err = _run(
         capsys, "simulate", "rr_planar/s3_ic1", "--duration", "0.05", "--out", out
     )
-    assert code == 2 and text == "" and err.count("\n") == 1
-    assert err.startswith("error: ") and "disk full" in err and str(out) in err
+    warning, error = err.splitlines()  # the run is not certified (paper law), then the error
+    assert code == 2 and text == "" and warning.startswith("warning: NOT certified")
+    assert error.startswith("error: ") and "disk full" in error and str(out) in error
     assert list(tmp_path.iterdir()) == []
 
 
@@ -189,7 +198,8 @@ def test_bad_input_exits_2_with_one_line(capsys, argv, message):
 def test_a_diverging_run_exits_2_naming_time_and_state(capsys, tmp_path):
     out = tmp_path / "run"
     code, text, err = _run(capsys, "simulate", _diverging_scenario(tmp_path), "--out", out)
-    assert code == 2 and text == "" and err.count("\n") == 1
+    warning, err = err.splitlines()  # computed torque carries no guarantee, then the error
+    assert code == 2 and text == "" and warning.startswith("warning: not certified")
     assert err.startswith("error: the simulation diverged at t = ")
     assert "q = " in err and "qd = " in err
     assert not out.exists()

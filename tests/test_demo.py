@@ -148,7 +148,7 @@ def test_tool_change_with_the_default_settings_meets_epsilon(tmp_path):
 
 def test_a_start_off_the_reference_adapts_and_meets_epsilon_at_1_khz():
     """Starting 0.02 rad (2 epsilon) off the reference on every joint, the gains must adapt under
-    the 1 kHz zero-order hold; with the default synthesis (sampled-data gain limit) the run enters
+    the 1 kHz zero-order hold; with the default synthesis (implicit sampled-data law) the run enters
     the ball and stays inside (the paper's law alone diverges here: docs/modular.md)."""
     run = run_configuration("arm_4dof", duration=0.6, initial_offset=0.02, repeats=1)
     assert run.failure is None

@@ -3,8 +3,8 @@
 The full 8 s runs take 4-5 s each; the tests run shortened ones. With the paper's law unchanged,
 the 1 kHz runs of the Panda and of the UR5's heaviest corner diverge: the sampled loop is unstable
 once ``(kappa ||rho|| + phi) T`` exceeds twice the smallest eigenvalue of ``M(q)`` (a wrist mode),
-see ``test_the_panda_failure_is_the_zero_order_hold_gain_limit``. The scenarios therefore run with
-the sampled-data gain limit (the default for sampled scenarios, :mod:`urpc.control.interval`).
+see ``test_the_panda_failure_is_the_zero_order_hold_gain_limit``. The scenarios therefore run the
+implicit sampled-data law (the default for sampled scenarios, :mod:`urpc.control.interval`).
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ def test_scenarios_meet_epsilon_at_1_khz(name):
     assert run_scenario(scenario).metrics["met"]
 
 
-def test_without_the_gain_limit_the_panda_diverges_at_1_khz():
+def test_with_the_paper_law_the_panda_diverges_at_1_khz():
     paper_law = load_scenario("panda/sampled").with_overrides(
         duration=0.1, controller_options={"interval": {"sampled_law": "paper"}}
     )

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Sequence
 
 from ..errors import UrpcError
@@ -42,7 +43,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
-        return args.handler(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _print_warning
+            return args.handler(args)
     except UrpcError as exc:
         print(f"error: {one_line(str(exc))}", file=sys.stderr)
         return EXIT_INPUT
@@ -52,3 +55,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("error: interrupted", file=sys.stderr)
         return 130
+
+
+def _print_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Python warnings as the CLI's one-line ``warning:`` messages on stderr."""
+    print(f"warning: {one_line(str(message))}", file=sys.stderr)

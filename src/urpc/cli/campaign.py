@@ -4,7 +4,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .common import EXIT_OK, non_negative_float, non_negative_int, positive_int, print_json
+from ..control import SAMPLED_LAWS
+from .common import (
+    EXIT_OK,
+    non_negative_float,
+    non_negative_int,
+    positive_int,
+    print_json,
+    warn_uncertified,
+)
 
 
 def register(commands) -> None:
@@ -36,10 +44,10 @@ def register(commands) -> None:
     p.add_argument("--duration", type=float, help="override the scenario's duration [s]")
     p.add_argument("--plant", choices=PLANT_BACKENDS, help="override the scenario's plant backend")
     p.add_argument(
-        "--sampled-gain-limit",
-        choices=("on", "off"),
-        help="interval controller: cap each inertia mode's gain at lambda_i/T (on) or run the "
-        "paper's law unchanged (off); default: the scenario's setting",
+        "--sampled-law",
+        choices=SAMPLED_LAWS,
+        help="law of a sampled interval controller: implicit (certified by urpc certify) or "
+        "paper (the paper's law unchanged); default: the scenario's setting",
     )
     p.add_argument(
         "--ic-spread",
@@ -61,8 +69,8 @@ def run_campaign_command(args) -> int:
     from ..studies.campaign import check_writable, run_campaign
     from ..studies.scenario import load_scenario
 
-    limit = args.sampled_gain_limit
-    options = None if limit is None else {"interval": {"sampled_gain_limit": limit == "on"}}
+    law = args.sampled_law
+    options = None if law is None else {"interval": {"sampled_law": law}}
     scenario = load_scenario(args.scenario).with_overrides(
         duration=args.duration, plant=args.plant, controller_options=options
     )
@@ -77,6 +85,7 @@ def run_campaign_command(args) -> int:
         ic_spread=args.ic_spread,
         vertex_runs=args.vertex_runs,
     )
+    warn_uncertified(result.certificate)
     result.save(out)
     summary = result.summary()
     if args.json:
@@ -94,6 +103,8 @@ def describe_summary(summary: dict, out: Path) -> list[str]:
         f"{summary['rejected_draws']} inconsistent draws rejected), seed {summary['seed']}",
         f"  met epsilon = {summary['epsilon']:g} rad  {summary['met']}/{summary['runs']} "
         f"(met_fraction {summary['met_fraction']:.4g})",
+        "  guarantee            "
+        + ("certified" if summary["certified"] else summary["not_certified"]),
     ]
     if summary["diverged"] or summary["never_entered"]:
         lines.append(

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -115,8 +116,18 @@ def one_line(text: str) -> str:
     return " ".join(text.split())
 
 
+def json_text(payload: dict) -> str:
+    return json.dumps(jsonable(payload), indent=2, allow_nan=False)
+
+
 def print_json(payload: dict) -> None:
-    print(json.dumps(jsonable(payload), indent=2, allow_nan=False))
+    print(json_text(payload))
+
+
+def warn_uncertified(guarantee: dict) -> None:
+    """One ``warning:`` line on stderr when a run's configuration is not certified."""
+    if not guarantee["certified"]:
+        print(f"warning: {guarantee['not_certified']}", file=sys.stderr)
 
 
 def jsonable(value):

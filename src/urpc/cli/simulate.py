@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..control import SAMPLED_LAWS
 from ..errors import InputError
-from .common import EXIT_OK, names, positive_float, print_json
+from .common import EXIT_OK, json_text, names, positive_float, print_json, warn_uncertified
 
 
 def register(commands) -> None:
@@ -21,7 +21,7 @@ def register(commands) -> None:
         "physically consistent draw from the box (printed), epsilon is 1e-2 rad, the control "
         "period 1e-3 s, no disturbance, 10 s.",
         epilog="Prints whether ||e|| < epsilon was met, the errors, the torque cost and the gains; "
-        "--json prints them as one object; --out DIR saves result.npz, result.csv, summary.json, "
+        "--json prints them as one object; --out DIR saves result.npz, result.csv, summary.json, certificate.json, "
         "scenario.yaml and the figures (PNG).",
     )
     add_scenario_arguments(p)
@@ -119,11 +119,14 @@ def add_scenario_arguments(p, simulate: bool = True) -> None:
 # ============================================================================== simulate
 def run_simulate(args) -> int:
     from ..sim.plotting import plot_error, plot_torque, plot_trajectory
+    from ..studies.certification import certificate_fields
     from ..studies.scenario import build, build_controller, simulate_setup
 
     scenario = scenario_from_arguments(args)
     setup = build(scenario)
     controller = build_controller(setup)
+    guarantee = certificate_fields(setup, controller)
+    warn_uncertified(guarantee)
     result = simulate_setup(setup, controller, progress=_show_progress(args))
     summary = {
         **result.summary(),
@@ -132,7 +135,10 @@ def run_simulate(args) -> int:
         "true_parameters": {
             "description": setup.true_description,
             "values": result.info["true_parameters"],
+            "inside_box": setup.inside_box,
+            "outside_box": setup.outside_box,
         },
+        **guarantee,
     }
     if args.out is not None:
         import yaml
@@ -140,6 +146,8 @@ def run_simulate(args) -> int:
         from ..sim.results import write_files
 
         writers = result.writers(csv=True)
+        guarantee_text = json_text({key: summary[key] for key in guarantee})
+        writers["certificate.json"] = lambda path: path.write_text(guarantee_text)
         document = yaml.safe_dump(scenario.to_dict(), sort_keys=False)
         writers["scenario.yaml"] = lambda path: path.write_text(document)
         figures = {
@@ -232,6 +240,16 @@ def _print_summary(result, scenario, setup, summary: dict, out: Path | None) -> 
     )
     print(f"run          {result.duration:g} s, {timing}")
     print(f"true plant   {setup.true_description}")
+    if summary["certified"]:
+        certificate = summary["certificate"]
+        floor = certificate["epsilon_floor"]
+        covered = "" if setup.inside_box else "; this true plant lies OUTSIDE the box"
+        print(
+            f"guarantee    certified for the box ({certificate['law']} law; floor "
+            f"{floor:.3g} rad){covered}"
+        )
+    else:
+        print(f"guarantee    {summary['not_certified']}")
     if m["met"]:
         print(
             f"result       MET: ||e|| < epsilon = {epsilon:g} rad from t = "

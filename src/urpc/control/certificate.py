@@ -103,9 +103,8 @@ class Certificate:
         return f"{head}; fails: {first.name} ({first.explanation})"
 
     def to_dict(self) -> dict[str, Any]:
-        data = asdict(self)
-        data["conditions"] = [asdict(c) for c in self.conditions]
-        return data
+        """Plain JSON-ready fields; a non-finite number (an infinite floor) becomes ``None``."""
+        return _finite_or_none(asdict(self))
 
 
 def certify(
@@ -391,3 +390,13 @@ def _link_vertices(robot, box) -> tuple[slice, np.ndarray, np.ndarray]:
     vertices = np.zeros((10, corners.shape[1]))
     vertices[free] = np.where(corners, upper[free, None], lower[free, None]) - nominal[free, None]
     return slice(10 * body, 10 * body + 10), A, vertices
+
+
+def _finite_or_none(value):
+    if isinstance(value, dict):
+        return {key: _finite_or_none(item) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite_or_none(item) for item in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value

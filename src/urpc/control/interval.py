@@ -77,6 +77,7 @@ class IntervalPassivityController(Controller):
 
     Attributes:
         adaptive: True for Theorem 2 (growing gains, one state), False for Theorem 1.
+        implicit: True when the implicit sampled-data law runs (a period and ``"implicit"``).
         phi_max: The ceiling of ``phi`` [N m s/rad] where adaptation stops (implicit law), or
             ``inf``.
         last_rho_norm: ``||rho||`` [N m] of the latest :meth:`output` call (diagnostic cache).
@@ -111,9 +112,9 @@ class IntervalPassivityController(Controller):
         self.sample_period = None if sample_period is None else float(sample_period)
         self.sampled_law = sampled_law
         self.inertia_bounds = inertia_bounds
-        self._implicit = self.sample_period is not None and sampled_law == "implicit"
+        self.implicit = self.sample_period is not None and sampled_law == "implicit"
         self.phi_max = math.inf
-        if self._implicit:
+        if self.implicit:
             if inertia_bounds is None:
                 raise ValueError("the implicit sampled law needs the box's inertia bounds")
             self._lower_robot = inertia_bounds.lower_robot
@@ -176,7 +177,7 @@ class IntervalPassivityController(Controller):
             gain = (self.kappa_P + self.kappa_I * s) * rho_norm + self.phi_P + self.phi_I * s
         else:
             gain = self.kappa_P * rho_norm + self.phi_P
-        if self._implicit:
+        if self.implicit:
             return nominal + self._sampled_feedback(q, gain, r)
         return nominal + gain * r
 

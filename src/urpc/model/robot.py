@@ -218,7 +218,7 @@ class Robot:
     def M(self, q: np.ndarray) -> np.ndarray:
         """Joint-space inertia matrix ``M(q)`` [kg m^2], symmetric, ``dof x dof``."""
         # Pinocchio fills the upper triangle of a fresh array; mirror it (cached indices: this is
-        # on the control step's hot path with the sampled-data gain limit).
+        # on the control step's hot path with the implicit sampled-data law).
         M = pin.crba(self.model, self.data, self.configuration(q))
         lower = self._lower_indices
         M[lower] = M.T[lower]

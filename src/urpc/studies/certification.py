@@ -2,9 +2,12 @@
 
 :func:`urpc.control.certificate.certify` works on a synthesized controller; a scenario supplies
 everything else (the reference it tracks, for how long, and the disturbance bound its plant sees).
+Runs and campaigns record the outcome with :func:`certificate_fields`.
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 from ..control.base import Controller
 from ..control.certificate import Certificate, certify
@@ -26,3 +29,17 @@ def certify_setup(setup, controller: Controller) -> Certificate:
         duration=scenario.duration,
         disturbance_bound=scenario.disturbance,
     )
+
+
+def certificate_fields(setup, controller: Controller) -> dict[str, Any]:
+    """``certified`` (bool), ``certificate`` (its fields, or ``None``) and ``not_certified``
+    (one line saying why, or ``None``) of a run of ``controller`` in ``setup``."""
+    if not isinstance(controller, IntervalPassivityController):
+        why = f"not certified: the {controller.name} controller carries no guarantee (only interval does)"
+        return {"certified": False, "certificate": None, "not_certified": why}
+    certificate = certify_setup(setup, controller)
+    return {
+        "certified": certificate.certified,
+        "certificate": certificate.to_dict(),
+        "not_certified": None if certificate.certified else certificate.summary(),
+    }

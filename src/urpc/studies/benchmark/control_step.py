@@ -14,7 +14,7 @@ from .robots import BENCHMARK_ROBOTS
 from .timing import time_calls
 
 #: The scenario whose controller, box and settings each robot's control step and synthesis use:
-#: the robot's 1 kHz scenario (sampled-data gain limit on); for the RR arm, scenario 3 (the paper's
+#: the robot's 1 kHz scenario (implicit sampled-data law); for the RR arm, scenario 3 (the paper's
 #: law unchanged).
 CONTROL_SCENARIOS = {
     "rr_planar": "rr_planar/s3_ic1",
@@ -72,14 +72,14 @@ def profile_control_step(
 
     Parts of :meth:`IntervalPassivityController.output` (with the default, regressor-based
     method): ``regressor`` (``Y_SL``, the Pinocchio regressor calls), ``bound`` (the enclosure
-    from ``Y_SL``), ``nominal`` (``Y_SL pi0``), ``gain_limit`` (``M0(q)`` by CRBA, its ``eigh``
-    and the modal product; only with the sampled-data gain limit), of which ``inertia``
-    (:meth:`Robot.M`: CRBA and symmetrization), ``crba`` (the bare Pinocchio call) and ``eigh``
-    alone; ``arithmetic`` (a replica of the array arithmetic of ``output`` around those calls:
+    from ``Y_SL``), ``nominal`` (``Y_SL pi0``), ``sampled_law`` (the implicit feedback: ``M_L(q)``
+    by CRBA and one symmetric solve; only with the implicit sampled-data law), of which
+    ``inertia`` (:meth:`Robot.M` of the lower-bound model: CRBA and symmetrization), ``crba``
+    (the bare Pinocchio call) and ``solve`` alone; ``arithmetic`` (a replica of the array arithmetic of ``output`` around those calls:
     ``e``, ``qd_a``, ``qdd_a``, ``r``, ``rho``, its norm, the gain, the sum); ``other`` =
     ``output`` minus the parts (call overhead, and what the parts lose when they run together
-    rather than alone); ``output_without_gain_limit`` (the same step with the paper's law, so
-    that the difference is the gain limit's cost inside the step); and ``rnea`` for scale.
+    rather than alone); ``output_paper_law`` (the same step with the paper's law, so that the
+    difference is the sampled law's cost inside the step); and ``rnea`` for scale.
     """
     return {robot_name: _profile_robot(robot_name, repeats) for robot_name in robots}
 
@@ -131,17 +131,20 @@ def _profile_robot(robot_name: str, repeats: int) -> dict[str, float]:
         "arithmetic": arithmetic,
         "rnea": lambda: pin.rnea(robot.model, data, config, qd, qdd_a),
     }
-    if controller.sample_period is not None:
-        # The private method is exactly what output() runs for the gain limit.
-        functions["gain_limit"] = lambda: controller._sampled_feedback(q, 1e3, r)
-        unlimited = copy.copy(controller)  # shares the bound method; only the period differs
-        unlimited.sample_period = None
-        functions["output_without_gain_limit"] = lambda: unlimited.output(*args)
-        functions["inertia"] = lambda: robot.M(q)
-        functions["crba"] = lambda: pin.crba(robot.model, data, config)
-        functions["eigh"] = lambda: np.linalg.eigh(M)
+    if controller.implicit:
+        # The private method is exactly what output() runs for the implicit law.
+        lower = controller.inertia_bounds.lower_robot
+        lower_data = lower.model.createData()
+        functions["sampled_law"] = lambda: controller._sampled_feedback(q, 1e3, r)
+        paper = copy.copy(controller)  # shares the bound method; only the law differs
+        paper.implicit = False
+        functions["output_paper_law"] = lambda: paper.output(*args)
+        functions["inertia"] = lambda: lower.M(q)
+        functions["crba"] = lambda: pin.crba(lower.model, lower_data, config)
+        shifted = M + 1e3 * controller.sample_period * np.eye(len(q))
+        functions["solve"] = lambda: np.linalg.solve(shifted, M @ r)
     times = time_calls(functions, repeats)
-    parts = ("regressor", "bound", "nominal", "arithmetic", "gain_limit")
+    parts = ("regressor", "bound", "nominal", "arithmetic", "sampled_law")
     times["other"] = times["output"] - sum(times.get(name, 0.0) for name in parts)
     return times
 
@@ -149,15 +152,15 @@ def _profile_robot(robot_name: str, repeats: int) -> dict[str, float]:
 #: Columns of :func:`format_profile`: key, heading.
 PROFILE_COLUMNS = (
     ("output", "control step"),
-    ("output_without_gain_limit", "step without gain limit"),
+    ("output_paper_law", "step with the paper's law"),
     ("regressor", "regressor Y_SL"),
     ("bound", "bound from Y_SL"),
     ("nominal", "nominal Y_SL pi0"),
     ("arithmetic", "array arithmetic"),
-    ("gain_limit", "gain limit"),
-    ("inertia", "of which M0(q)"),
+    ("sampled_law", "implicit law"),
+    ("inertia", "of which M_L(q)"),
     ("crba", "of which bare crba"),
-    ("eigh", "of which eigh"),
+    ("solve", "of which solve"),
     ("other", "other"),
     ("rnea", "RNEA"),
 )
@@ -174,7 +177,7 @@ def format_profile(profile: dict[str, dict[str, float]]) -> str:
         for key, _ in PROFILE_COLUMNS:
             if key not in times:
                 cells.append("-")
-            elif key in ("output", "output_without_gain_limit", "rnea"):
+            elif key in ("output", "output_paper_law", "rnea"):
                 cells.append(f"{1e6 * times[key]:.1f}")
             else:
                 cells.append(f"{1e6 * times[key]:.1f} ({100 * times[key] / times['output']:.0f} %)")

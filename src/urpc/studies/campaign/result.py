@@ -44,6 +44,8 @@ class CampaignResult:
         workers: Local worker processes (``None`` on a Dask cluster).
         scheduler: Dask scheduler address, or ``None`` for the local pool.
         wall_time: Wall time of the whole campaign [s], pool or client start-up included.
+        certificate: :func:`~urpc.studies.certification.certificate_fields` of the scenario's
+            controller (the same for every run: the box, reference and disturbance are shared).
     """
 
     scenario: Scenario
@@ -55,6 +57,11 @@ class CampaignResult:
     workers: int | None
     scheduler: str | None
     wall_time: float
+    certificate: Mapping[str, Any]
+
+    @property
+    def certified(self) -> bool:
+        return bool(self.certificate["certified"])
 
     @property
     def runs(self) -> int:
@@ -101,7 +108,8 @@ class CampaignResult:
         ``rejected_draws``, ``rejected_vertices``, ``uncertain_parameters``); the execution
         (``workers``, ``scheduler``, ``wall_time`` [s], ``runs_per_minute``, ``run_cpu_time_mean``
         [s] and ``runs_per_minute_per_core`` = 60 / ``run_cpu_time_mean``, the throughput of
-        one unshared core).
+        one unshared core); ``certified``, ``not_certified`` (why, or ``None``) and
+        ``certificate`` (:func:`~urpc.studies.certification.certificate_fields`).
         """
         rows = self.rows()
         ok = [r for r in rows if r["status"] == "ok"]
@@ -142,6 +150,7 @@ class CampaignResult:
             "runs_per_minute": 60.0 * self.runs / self.wall_time if self.wall_time > 0 else None,
             "run_cpu_time_mean": cpu_time,
             "runs_per_minute_per_core": 60.0 / cpu_time if cpu_time else None,
+            **self.certificate,
         }
 
     def plot(self):

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError
+from ..certification import certificate_fields
 from ..scenario import Scenario, build, build_controller, load_scenario
 from .draws import checked_count, draw_runs
 from .progress import CampaignProgress
@@ -55,7 +56,8 @@ def run_campaign(
         scenario = load_scenario(scenario)
     workers = checked_count("workers", workers, 1)
     setup = build(scenario)
-    build_controller(setup)  # bad controller options fail here, before any worker starts
+    # Bad controller options fail here, before any worker starts; one certificate for all runs.
+    guarantee = certificate_fields(setup, build_controller(setup))
     specs, draws = draw_runs(setup, runs, seed, ic_spread=ic_spread, vertex_runs=vertex_runs)
     document = json.dumps(scenario.to_dict(), sort_keys=True)
     source = None if scenario.source is None else str(scenario.source)
@@ -88,6 +90,7 @@ def run_campaign(
         workers=None if scheduler is not None else workers,
         scheduler=scheduler,
         wall_time=time.perf_counter() - start,
+        certificate=guarantee,
     )
 
 

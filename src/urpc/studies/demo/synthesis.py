@@ -94,7 +94,7 @@ def synthesize_configuration(
         out_dir: Folder for the composed URDF and uncertainty file (default: temporary).
         repeats: Timed repeats, >= 1.
         sample_period: The control period [s] the controller is synthesized for (its
-            sampled-data gain limit); ``None`` for continuous time.
+            implicit sampled-data law); ``None`` for continuous time.
 
     Raises:
         InputError: an invalid configuration (see :func:`urpc.model.modular.assemble`).

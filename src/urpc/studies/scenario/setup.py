@@ -8,6 +8,7 @@ joint limits, link names) and naming the scenario file and the field in every er
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -26,6 +27,10 @@ from ...sim.trajectories import (
     generic_trajectory,
 )
 from .settings import Scenario, TrajectorySpec
+
+
+class OutsideBoxWarning(UserWarning):
+    """The true plant of a run lies outside the parameter box the controller was built for."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,6 +59,31 @@ class ScenarioSetup:
     q0: np.ndarray
     qd0: np.ndarray
     torque_limit: np.ndarray | None
+
+    @property
+    def outside_box(self) -> dict[str, float]:
+        """``link.field`` -> distance [SI] outside the box of each true parameter that is not in
+        it (empty: the true plant is one of the plants the guarantee covers)."""
+        return box_excursions(self.box, self.true_point)
+
+    @property
+    def inside_box(self) -> bool:
+        return not self.outside_box
+
+
+def box_excursions(box: ParameterBox, point: dict[str, np.ndarray]) -> dict[str, float]:
+    """``link.field`` -> distance [SI] outside ``box`` of the coordinates of ``point`` that are
+    not in it (rounding of 1e-12 relative tolerated)."""
+    excursions = {}
+    for box_link in box.links:
+        if box_link.link not in point:
+            continue
+        values = np.asarray(point[box_link.link], dtype=float)
+        tolerance = 1e-12 * np.maximum(1.0, np.abs(values))
+        distance = np.maximum(box_link.lower - values, values - box_link.upper)
+        for k in np.flatnonzero(distance > tolerance):
+            excursions[f"{box_link.link}.{box_link.fields[k]}"] = float(distance[k])
+    return excursions
 
 
 def build(scenario: Scenario) -> ScenarioSetup:
@@ -88,9 +118,18 @@ def build(scenario: Scenario) -> ScenarioSetup:
         limit = np.broadcast_to(
             _fit(scenario.torque_limit, nominal.dof, source, "torque_limit"), (nominal.dof,)
         ).copy()
-    return ScenarioSetup(
+    setup = ScenarioSetup(
         scenario, nominal, box, plant, point, description, trajectory, q0, qd0, limit
     )
+    if setup.outside_box:
+        where = ", ".join(f"{name} by {gap:.4g}" for name, gap in setup.outside_box.items())
+        warnings.warn(
+            f"the true parameters lie outside the box ({where}): the guarantee does not cover "
+            "this plant",
+            OutsideBoxWarning,
+            stacklevel=2,
+        )
+    return setup
 
 
 def _fit(value: Any, dof: int, source: str | None, fieldname: str) -> np.ndarray:
