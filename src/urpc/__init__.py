@@ -27,6 +27,8 @@ _LAZY = {
     "BoundMethod": (".bounds", "BoundMethod"),
     "default_method": (".bounds", "default_method"),
     "make_bound": (".bounds", "make_bound"),
+    "Certificate": (".control.certificate", "Certificate"),
+    "certify": (".control.certificate", "certify"),
     "IntervalPassivityController": (".control.interval", "IntervalPassivityController"),
     "synthesize": (".control.synthesis", "synthesize"),
     "Assembly": (".model.modular", "Assembly"),
@@ -42,6 +44,7 @@ _LAZY = {
     "METRIC_NAMES": (".sim.metrics", "METRIC_NAMES"),
     "SimulationResult": (".sim.results", "SimulationResult"),
     "simulate": (".sim.simulation", "simulate"),
+    "PaperTrajectory": (".sim.trajectories", "PaperTrajectory"),
     "load_scenario": (".studies.scenario", "load_scenario"),
 }
 
@@ -49,11 +52,13 @@ __all__ = [
     "BOUND_METHODS",
     "Assembly",
     "BoundMethod",
+    "Certificate",
     "InputError",
     "ParameterBox",
     "Robot",
     "SimulationError",
     "UrpcError",
+    "certify",
     "default_method",
     "load_parameter_point",
     "load_robot",
@@ -63,6 +68,7 @@ __all__ = [
     "__version__",
     "IntervalPassivityController",
     "METRIC_NAMES",
+    "PaperTrajectory",
     "SimulationResult",
     "simulate",
     "synthesize",
@@ -91,6 +97,7 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
     from .bounds import METHODS as BOUND_METHODS
     from .bounds import BoundMethod, default_method, make_bound
+    from .control.certificate import Certificate, certify
     from .control.interval import IntervalPassivityController
     from .control.synthesis import synthesize
     from .model.modular import Assembly, assemble, load_assembly, load_module_library
@@ -104,4 +111,5 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
     from .sim.metrics import METRIC_NAMES
     from .sim.results import SimulationResult
     from .sim.simulation import simulate
+    from .sim.trajectories import PaperTrajectory
     from .studies.scenario import load_scenario
