@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from urpc.bounds import METHODS, default_method, make_bound
 from urpc.bounds.base import ROUNDING_ABSOLUTE
 from urpc.bounds.vertex import VertexBound, curvature_directions, unit_mass_parameters
-from urpc.errors import InputError
+from urpc.errors import InputError, UrpcError
 from urpc.model.regressor import SlotineLiRegressor
 from urpc.model.uncertainty import LinkBox, ParameterBox, parse_uncertainty
 
@@ -261,8 +261,16 @@ def test_enclose_regressor_agrees_with_enclose(boxes, method):
     robot, box = boxes["panda"]
     bound = build(method, robot, box)
     state = random_state(np.random.default_rng(9), robot.dof)
-    Y = SlotineLiRegressor(box.nominal_robot(robot))(*state)
-    for got, expected in zip(bound.enclose_regressor(Y), bound.enclose(*state), strict=True):
+    regressor = SlotineLiRegressor(box.nominal_robot(robot))
+    Y = regressor(*state)
+    with pytest.raises(UrpcError, match="rounding envelope"):  # a foreign Y: state unknown
+        bound.enclose_regressor(Y)
+    enclosed = bound.enclose_regressor(Y, envelope=regressor.envelope)
+    for got, expected in zip(enclosed, bound.enclose(*state), strict=True):
+        np.testing.assert_allclose(got, expected, rtol=1e-13, atol=1e-13)
+    # The bound's own regressor: its last call's envelope is used.
+    own = bound.regressor(*state)
+    for got, expected in zip(bound.enclose_regressor(own), enclosed, strict=True):
         np.testing.assert_allclose(got, expected, rtol=1e-13, atol=1e-13)
 
 

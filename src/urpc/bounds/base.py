@@ -22,11 +22,16 @@ from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
 
 #: Relative inflation of the fast methods' enclosures, applied to the sum of absolute values of the
-#: terms (so it covers the rounding of every product and sum, including Pinocchio's). Double
-#: rounding errors of these sums are below ``n_terms * 2**-53`` relative; a few hundred terms and
-#: the regressor's own recursion stay far below 1e-12, so 1e-9 is a wide safety factor that is
-#: still invisible in the controller (1e-9 N m per N m of torque).
+#: terms ``sum_j |Y_ij| p_j`` (it covers the rounding of every product and sum the methods compute
+#: from ``Y_SL``: below ``n_terms * 2**-53`` relative, a few hundred terms stay below 1e-13).
 ROUNDING_RELATIVE = 1e-9
+#: Inflation per unit of the regressor's rounding envelope ``E``
+#: (:attr:`~urpc.model.regressor.SlotineLiRegressor.envelope`) and of parameter magnitude:
+#: ``ROUNDING_RECURSION E sum_j p_j`` over the columns a joint carries covers the rounding inside the
+#: two regressor calls and their difference, which follows the size of the terms *before* the
+#: subtraction (``|qd|^2`` at high joint rates), not of ``Y_SL``. Measured worst error of an entry:
+#: 4.4 unit roundoffs (5e-16) times ``E`` (``docs/bounds.md`` section 7); 1e-12 is 2000 times that.
+ROUNDING_RECURSION = 1e-12
 #: Absolute inflation [N m], for terms that cancel to exactly zero.
 ROUNDING_ABSOLUTE = 1e-12
 
@@ -74,8 +79,20 @@ class BoundMethod(ABC):
         return self._regressor
 
     @abstractmethod
-    def enclose_regressor(self, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(lower, upper)`` from a Slotine-Li regressor ``Y`` (shape ``dof x 10 dof``)."""
+    def enclose_regressor(
+        self, Y: np.ndarray, envelope: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``(lower, upper)`` from a Slotine-Li regressor ``Y`` (shape ``dof x 10 dof``).
+
+        Args:
+            Y: ``Y_SL`` at the state.
+            envelope: The rounding envelope of the state
+                (:meth:`~urpc.model.regressor.SlotineLiRegressor.state_envelope`); by default the
+                one of :attr:`regressor`'s last call, which must then have returned ``Y``.
+        """
+
+    def _envelope(self, Y: np.ndarray, envelope: float | None) -> float:
+        return self.regressor.envelope_of(Y) if envelope is None else float(envelope)
 
     def _add_disturbance(
         self, lower: np.ndarray, upper: np.ndarray
@@ -95,3 +112,17 @@ def link_body_placement(robot: Robot, link: str) -> tuple[int, np.ndarray]:
     if inertial.joint_index == 0:
         raise ValueError(f"link '{link}' is fixed to the base and has no regressor")
     return inertial.joint_index - 1, placement_matrix(inertial.placement)
+
+
+def envelope_weights(robot: Robot, magnitude: np.ndarray) -> np.ndarray:
+    """``K_i = ROUNDING_RECURSION sum_j p_j`` per joint ``i`` [N m per unit envelope], over the
+    regressor columns ``j`` of the bodies joint ``i`` carries (the others are exactly zero in its
+    row); ``magnitude`` holds ``p_j`` per column (``10`` per body, body coordinates)."""
+    model = robot.model
+    per_body = np.asarray(magnitude, dtype=float).reshape(-1, 10).sum(axis=1)
+    weights = np.zeros(robot.dof)
+    for body in range(1, model.njoints):
+        for joint in model.supports[body]:
+            if joint > 0:
+                weights[model.joints[joint].idx_v] += per_body[body - 1]
+    return ROUNDING_RECURSION * weights

@@ -22,7 +22,13 @@ import numpy as np
 from ..model.regressor import SlotineLiRegressor
 from ..model.uncertainty import LinkBox
 from . import interval as ia
-from .base import ROUNDING_ABSOLUTE, ROUNDING_RELATIVE, BoundMethod, link_body_placement
+from .base import (
+    ROUNDING_ABSOLUTE,
+    ROUNDING_RELATIVE,
+    BoundMethod,
+    envelope_weights,
+    link_body_placement,
+)
 
 
 def barycentric_enclosure(box: LinkBox) -> tuple[np.ndarray, np.ndarray]:
@@ -66,6 +72,7 @@ class HullBound(BoundMethod):
         center_weight = np.zeros(n_columns)  # center = Y4 @ center_weight
         radius_weight = np.zeros(n_columns)  # body-frame links' radii and all rounding margins
         placed = []  # links off their body frame: radius += sum |Y4 @ (A diag(pi_r))|
+        magnitudes = np.zeros(n_columns)  # p_j per column, body coordinates
         for link_box in box.uncertain_links:
             lower, upper = barycentric_enclosure(link_box)
             nominal = link_box.standard_parameters(link_box.nominal)
@@ -77,6 +84,7 @@ class HullBound(BoundMethod):
             # |Y_j| (|A| (|center| + |nominal| + radius))_j.
             magnitude = np.abs(A) @ (np.abs(center) + np.abs(nominal) + radius)
             radius_weight[columns] += scale * ROUNDING_RELATIVE * magnitude
+            magnitudes[columns] += magnitude
             if np.array_equal(A, np.eye(10)):
                 radius_weight[columns] += scale * radius
             else:
@@ -87,25 +95,39 @@ class HullBound(BoundMethod):
         self._linear = np.column_stack([center_weight, *placed]) if placed else center_weight
         self._ones = np.ones(self._linear.shape[1]) if placed else None
         self._radius_weight = radius_weight
-        self._constant = ROUNDING_ABSOLUTE + (self.disturbance_bound or 0.0)
+        # Rounding inside the regressor (base.ROUNDING_RECURSION): K_i per unit envelope, plus
+        # the absolute margin (and the known disturbance bound, in rho) per joint.
+        # Below the floor (4 times the envelope at rest: gravity and rates up to about 10 rad/s)
+        # the margin is the constant floor K_i, so ordinary states cost no array operation.
+        self._envelope_weight = scale * envelope_weights(self.robot, magnitudes)
+        self._envelope_floor = 4.0 * self.regressor.envelope_at_rest()
+        self._offset = ROUNDING_ABSOLUTE + self._envelope_floor * self._envelope_weight
+        self._constant = self._offset + (self.disturbance_bound or 0.0)
+        self._regressor = self.regressor
         self._scaled_regressor = self.regressor.scaled
 
-    def _center_radius(self, Y4: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Center and radius (with the absolute margin) from ``Y4 = SCALE * Y_SL``."""
+    def _center_radius(self, Y4: np.ndarray, envelope: float) -> tuple[np.ndarray, np.ndarray]:
+        """Center and radius (with the rounding margins) from ``Y4 = SCALE * Y_SL``."""
         linear = Y4.dot(self._linear)
         radius = np.abs(Y4).dot(self._radius_weight)
-        radius += ROUNDING_ABSOLUTE
+        radius += self._offset  # max(envelope, floor) K_i + ROUNDING_ABSOLUTE
+        if envelope > self._envelope_floor:
+            radius += (envelope - self._envelope_floor) * self._envelope_weight
         if self._ones is None:
             return linear, radius
         radius += np.abs(linear[:, 1:]).sum(axis=1)
         return linear[:, 0], radius
 
     def enclose(self, q, qd, qd_a, qdd_a):
-        center, radius = self._center_radius(self._scaled_regressor(q, qd, qd_a, qdd_a))
+        Y4 = self._scaled_regressor(q, qd, qd_a, qdd_a)
+        center, radius = self._center_radius(Y4, self._regressor.envelope)
         return self._add_disturbance(center - radius, center + radius)
 
-    def enclose_regressor(self, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        center, radius = self._center_radius(SlotineLiRegressor.SCALE * Y)
+    def enclose_regressor(
+        self, Y: np.ndarray, envelope: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        envelope = self._envelope(Y, envelope)
+        center, radius = self._center_radius(SlotineLiRegressor.SCALE * Y, envelope)
         return self._add_disturbance(center - radius, center + radius)
 
     def rho(self, q, qd, qd_a, qdd_a):
@@ -116,4 +138,7 @@ class HullBound(BoundMethod):
         linear = np.abs(Y4.dot(self._linear))  # |center| (and the placed radius terms)
         rho += linear if self._ones is None else linear.dot(self._ones)
         rho += self._constant
+        envelope = self._regressor.envelope
+        if envelope > self._envelope_floor:
+            rho += (envelope - self._envelope_floor) * self._envelope_weight
         return rho

@@ -38,7 +38,9 @@ on a 7-joint arm it costs a few microseconds per control step, where the same wo
 
 Rounding: the result is inflated by ``base.ROUNDING_RELATIVE`` times ``sum_j |Y_ij| p_j``, where
 ``p_j`` bounds ``|pi_j| + |pi0_j|`` over the box in body coordinates (every term of every sum above
-is a product bounded by one of those), plus ``base.ROUNDING_ABSOLUTE``.
+is a product bounded by one of those), plus ``base.ROUNDING_RECURSION E sum_j p_j`` for the
+rounding inside the regressor (``E`` its envelope, which follows ``|qd|^2``), plus
+``base.ROUNDING_ABSOLUTE``.
 """
 
 from __future__ import annotations
@@ -52,7 +54,13 @@ from ..errors import InputError
 from ..model.regressor import SlotineLiRegressor
 from ..model.robot import Robot
 from ..model.uncertainty import LinkBox, ParameterBox, barycentric_from_physical
-from .base import ROUNDING_ABSOLUTE, ROUNDING_RELATIVE, BoundMethod, link_body_placement
+from .base import (
+    ROUNDING_ABSOLUTE,
+    ROUNDING_RELATIVE,
+    BoundMethod,
+    envelope_weights,
+    link_body_placement,
+)
 from .hull import barycentric_enclosure
 
 #: Standard-parameter indices of I_xx, I_yy, I_zz (Pinocchio order m, h, xx, xy, yy, xz, yz, zz).
@@ -94,6 +102,7 @@ class VertexBound(BoundMethod):
 
     def __init__(self, robot: Robot, box: ParameterBox, slope_margin: bool = True):
         super().__init__(robot, box)
+        self._regressor = self.regressor
         self._scaled_regressor = self.regressor.scaled
         links = box.uncertain_links
         placements = [link_body_placement(self.robot, b.link) for b in links]
@@ -116,6 +125,7 @@ class VertexBound(BoundMethod):
         self._weight = np.zeros(10 * n_bodies)
         self._matrices = np.zeros((len(links), 10, layout.n_products))
         self._mass_ratio = np.zeros(len(links))
+        magnitudes = np.zeros(10 * n_bodies)  # p_j per column, body coordinates
         for l, (link_box, (body, A), plain) in enumerate(
             zip(links, placements, in_body_frame, strict=True)
         ):
@@ -129,6 +139,9 @@ class VertexBound(BoundMethod):
             self._weight[10 * body : 10 * body + 10] += (
                 scale * ROUNDING_RELATIVE * (np.abs(A) @ magnitude)
             )
+            magnitudes[10 * body : 10 * body + 10] += np.abs(A) @ magnitude
+        # Rounding inside the regressor (base.ROUNDING_RECURSION), per unit envelope and joint.
+        self._envelope_weight = scale * envelope_weights(self.robot, magnitudes)
         self._bodies = np.array([body for body, _ in placements], dtype=np.int64)
         self._sizes = layout.sizes()
         self._products = np.zeros(layout.n_products)
@@ -136,10 +149,12 @@ class VertexBound(BoundMethod):
         # Rows: upper, -lower, rho (written by the kernel).
         self._extent = np.zeros((3, self.robot.dof))
 
-    def _evaluate(self) -> np.ndarray:
+    def _evaluate(self, envelope: float) -> np.ndarray:
         """``[upper, -lower, rho]`` per joint from ``self._Y4`` (one compiled call)."""
         vertex_extent(
             self._Y4,
+            envelope,
+            self._envelope_weight,
             self._bodies,
             self._matrices,
             self._mass_ratio,
@@ -152,19 +167,22 @@ class VertexBound(BoundMethod):
 
     def enclose(self, q, qd, qd_a, qdd_a):
         self._scaled_regressor(q, qd, qd_a, qdd_a, out=self._Y4)
-        return self._enclosure()
+        return self._enclosure(self._regressor.envelope)
 
-    def enclose_regressor(self, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def enclose_regressor(
+        self, Y: np.ndarray, envelope: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        envelope = self._envelope(Y, envelope)
         np.multiply(Y, SlotineLiRegressor.SCALE, out=self._Y4)
-        return self._enclosure()
+        return self._enclosure(envelope)
 
-    def _enclosure(self) -> tuple[np.ndarray, np.ndarray]:
-        extent = self._evaluate()
+    def _enclosure(self, envelope: float) -> tuple[np.ndarray, np.ndarray]:
+        extent = self._evaluate(envelope)
         return self._add_disturbance(-extent[1], extent[0].copy())
 
     def rho(self, q, qd, qd_a, qdd_a):
         self._scaled_regressor(q, qd, qd_a, qdd_a, out=self._Y4)
-        rho = self._evaluate()[2]
+        rho = self._evaluate(self._regressor.envelope)[2]
         return rho + self.disturbance_bound if self.disturbance_bound else rho.copy()
 
 
@@ -212,12 +230,15 @@ class _Layout:
 
 
 @numba.njit(
-    "void(f8[:, ::1], i8[::1], f8[:, :, ::1], f8[::1], f8[::1], i8[::1], f8[::1], f8[:, ::1])",
+    "void(f8[:, ::1], f8, f8[::1], i8[::1], f8[:, :, ::1], f8[::1], f8[::1], i8[::1], f8[::1], "
+    "f8[:, ::1])",
     cache=True,
     nogil=True,
     boundscheck=False,
 )
-def vertex_extent(Y4, bodies, matrices, mass_ratio, weight, sizes, z, out):
+def vertex_extent(
+    Y4, envelope, envelope_weight, bodies, matrices, mass_ratio, weight, sizes, z, out
+):
     """The vertex bound from ``Y4 = SCALE * Y_SL``: ``out = [upper, -lower, rho]`` per joint.
 
     Compiled (numba, cached on disk; IEEE arithmetic, no fast-math). For joint ``i`` and link
@@ -226,7 +247,8 @@ def vertex_extent(Y4, bodies, matrices, mass_ratio, weight, sizes, z, out):
         max(m_lo/m_hi t, t) + l + sum_j |r_j|,   t = max_v z_v + sum_k max(0, c_k + slope_k)
 
     and the lower bound the same with ``-z`` (``slope_k = min(0, max_e D, max_e -D) / 4`` is
-    sign-free); both add ``|Y4_i| . weight + ROUNDING_ABSOLUTE``. A link whose body joint ``i``
+    sign-free); both add ``|Y4_i| . weight + envelope envelope_weight_i + ROUNDING_ABSOLUTE``
+    (the rounding margins of ``docs/bounds.md`` section 7). A link whose body joint ``i``
     does not carry has an all-zero regressor row: its terms are exactly zero and are skipped.
     """
     n_vertices, n_axes, slope_margin = sizes[0], sizes[1], sizes[2]
@@ -234,7 +256,7 @@ def vertex_extent(Y4, bodies, matrices, mass_ratio, weight, sizes, z, out):
     dof, n_columns = Y4.shape
     n_products = matrices.shape[2]
     for i in range(dof):
-        absolute = ROUNDING_ABSOLUTE
+        absolute = ROUNDING_ABSOLUTE + envelope * envelope_weight[i]
         for c in range(n_columns):
             absolute += abs(Y4[i, c]) * weight[c]
         upper = absolute

@@ -9,6 +9,7 @@ import numpy as np
 from flint import arb, ctx
 
 from ...errors import InputError, UrpcError, did_you_mean
+from ...model.regressor import state_vector_error
 from ...model.robot import Robot
 from ...model.uncertainty import ParameterBox, physical_coordinates
 from ..base import BoundMethod
@@ -98,6 +99,13 @@ class RigorousBound(BoundMethod):
         balls = self.enclose_balls(q, qd, qd_a, qdd_a)
         lower = np.array([lower_float(b) for b in balls])
         upper = np.array([upper_float(b) for b in balls])
+        if not (np.isfinite(lower).all() and np.isfinite(upper).all()):
+            raise InputError(
+                "the state is too large for double precision: the enclosure of the mismatch "
+                f"torque overflows (|qd| = {np.max(np.abs(qd)):.3g}, "
+                f"|qd_a| = {np.max(np.abs(qd_a)):.3g}, |qdd_a| = {np.max(np.abs(qdd_a)):.3g})",
+                field="qd",
+            )
         if self.disturbance_bound:
             lower, upper = self._add_disturbance(lower, upper)
             # One rounded-to-nearest subtraction/addition: one ulp outward covers it.
@@ -156,13 +164,11 @@ class RigorousBound(BoundMethod):
 
     # ------------------------------------------------------------------------- internals
     def _state(self, *vectors: np.ndarray) -> list[list[arb]]:
-        balls = []
-        for name, vector in zip(("q", "qd", "qd_a", "qdd_a"), vectors, strict=True):
-            array = np.asarray(vector, dtype=float)
-            if array.shape != (self.robot.dof,):
-                raise InputError(f"{name} has shape {array.shape}, expected ({self.robot.dof},)")
-            balls.append([arb(float(x)) for x in array])
-        return balls
+        named = dict(zip(("q", "qd", "qd_a", "qdd_a"), vectors, strict=True))
+        problem = state_vector_error(self.robot, **named)  # wrong shape, NaN or inf
+        if problem is not None:
+            raise problem
+        return [[arb(float(x)) for x in np.asarray(v, dtype=float)] for v in vectors]
 
     def _body_parameters(self, point: Mapping[str, np.ndarray]) -> list[tuple[arb, ...]]:
         """Barycentric parameters (body frame) of every body, summed over its links, with the
