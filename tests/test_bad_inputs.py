@@ -63,6 +63,18 @@ def _bound(*vectors: str, method: str | None = None) -> list[str]:
     return argv + (["--method", method] if method else [])
 
 
+def _enclose(q, qd, qd_a, qdd_a, method: str = "vertex"):
+    """The API twin of :func:`_bound`: ``enclose`` on the RR arm's shipped box."""
+
+    def call(tmp: Path):
+        robot = urpc.load_robot("rr_planar")
+        box = urpc.load_uncertainty(RR_DIR / "uncertainty.yaml", robot)
+        vectors = (np.array(v, dtype=float) for v in (q, qd, qd_a, qdd_a))
+        return urpc.make_bound(method, robot, box).enclose(*vectors)
+
+    return call
+
+
 def _load_box(robot_path: str, box_path: str):
     def call(tmp: Path):
         robot = urpc.load_robot(tmp / robot_path if robot_path.endswith(".urdf") else robot_path)
@@ -129,8 +141,12 @@ CASES: dict[str, Case] = {
     ),
     # ---------------------------------------------------------------- states and methods
     "bound_wrong_length": Case({}, _bound("0.1", "0,0", "0,0", "0,0"), None, ("--q has 1 values", "2 joints"), names_file=""),
-    "bound_nan_state": Case({}, _bound("nan,0", "0,0", "0,0", "0,0"), None, ("finite",), names_file=""),
-    "bound_inf_state": Case({}, _bound("0,0", "inf,0", "0,0", "0,0"), None, ("finite",), names_file=""),
+    "bound_nan_state": Case({}, _bound("nan,0", "0,0", "0,0", "0,0"), _enclose([np.nan, 0], [0, 0], [0, 0], [0, 0]), ("finite",), names_file=""),
+    "bound_inf_state": Case({}, _bound("0,0", "inf,0", "0,0", "0,0"), _enclose([0, 0], [np.inf, 0], [0, 0], [0, 0]), ("finite",), names_file=""),
+    "bound_nan_qdd_a_api": Case({}, _bound("0,0", "0,0", "0,0", "nan,0"), _enclose([0, 0], [0, 0], [0, 0], [0, np.nan], method="hull"), ("qdd", "finite"), names_file=""),
+    "bound_overflowing_state": Case({}, _bound("1e308,1e308", "1e308,1e308", "0,0", "0,0"), _enclose([1e308] * 2, [1e308] * 2, [0, 0], [0, 0]), ("overflow", "qd"), names_file=""),
+    "bound_overflowing_state_hull": Case({}, _bound("0,0", "1e300,1", "1,1", "0,0", method="hull"), _enclose([0, 0], [1e300, 1], [1, 1], [0, 0], method="hull"), ("overflow",), names_file=""),
+    "bound_overflowing_state_rigorous": Case({}, _bound("0.3,0.5", "1e200,1e200", "1e200,1e200", "0,0", method="rigorous"), _enclose([0.3, 0.5], [1e200] * 2, [1e200] * 2, [0, 0], method="rigorous"), ("overflow",), names_file=""),
     "bound_unknown_method": Case({}, _bound("0,0", "0,0", "0,0", "0,0", method="interval"), lambda tmp: urpc.make_bound("interval", urpc.load_robot("rr_planar"), None), ("unknown bound method", "hull"), names_file=""),
 }  # fmt: skip
 

@@ -11,6 +11,14 @@ import ast
 import math
 import operator
 
+#: The largest finite double, for the overflow message.
+LARGEST = 1.7976931348623157e308
+
+
+class ExpressionOverflow(ValueError):
+    """An expression whose value (or an intermediate value) is beyond the largest double."""
+
+
 _OPS = {
     ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
     ast.Pow: operator.pow, ast.USub: operator.neg, ast.UAdd: operator.pos,
@@ -21,15 +29,28 @@ def evaluate(text: str) -> float:
     """The value of an arithmetic expression.
 
     Raises:
+        ExpressionOverflow: a number or a result beyond the largest double (``1e309``,
+            ``10**10**10``, ``1e200 * 1e200``); a :class:`ValueError` whose message says so.
         ValueError: anything else than numbers, ``pi`` and ``+ - * / **``, a division by zero,
-            an overflow, or a non-finite result.
+            or a complex result.
     """
+
+    def overflow() -> ExpressionOverflow:
+        return ExpressionOverflow(
+            f"'{text}' overflows: its value is beyond the largest double ({LARGEST:.4g})"
+        )
 
     def ev(node: ast.AST) -> float:
         if isinstance(node, ast.Expression):
             return ev(node.body)
         if isinstance(node, ast.Constant) and type(node.value) in (int, float):
-            return float(node.value)
+            try:
+                value = float(node.value)
+            except OverflowError:  # an integer literal beyond the largest double
+                raise overflow() from None
+            if not math.isfinite(value):  # a float literal such as 1e309 reads as inf
+                raise overflow()
+            return value
         if isinstance(node, ast.Name) and node.id == "pi":
             return math.pi
         if isinstance(node, ast.BinOp) and type(node.op) in _OPS:
@@ -40,8 +61,12 @@ def evaluate(text: str) -> float:
 
     try:
         value = ev(ast.parse(text.strip(), mode="eval"))
-    except (SyntaxError, ZeroDivisionError, OverflowError, TypeError) as exc:
+    except OverflowError:  # float ** float beyond the largest double
+        raise overflow() from None
+    except (SyntaxError, ZeroDivisionError, TypeError) as exc:
         raise ValueError(f"'{text}' is not plain arithmetic ({exc})") from None
-    if not math.isfinite(value):
-        raise ValueError(f"'{text}' is not finite")
+    if isinstance(value, complex):  # (-8) ** (1/3)
+        raise ValueError(f"'{text}' is not a real number")
+    if not math.isfinite(value):  # 1e200 * 1e200: IEEE overflow to inf, no exception
+        raise overflow()
     return value

@@ -217,6 +217,12 @@ def run_bound(args) -> int:
     bound = make_bound(method, robot, box)
     lower, upper = bound.enclose(args.q, args.qd, args.qd_a, args.qdd_a)
     rho = np.maximum(np.abs(lower), np.abs(upper))
+    if not (np.isfinite(lower).all() and np.isfinite(upper).all()):  # never print NaN or inf
+        raise InputError(
+            "the enclosure of the mismatch torque overflows double precision at this state; "
+            "give a smaller --q, --qd, --qd-a or --qdd-a",
+            field="qd",
+        )
     if args.json:
         print_json(
             {

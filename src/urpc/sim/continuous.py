@@ -49,8 +49,8 @@ def run_continuous(
         u = controller.output(t, q, qd, reference, state)
         state_rate = controller.state_derivative(t, q, qd, reference, state)
         step_times.append(clock() - tic)
-        if not np.isfinite(u).all():
-            raise Diverged(t, x, "non-finite torque")
+        if not np.isfinite(u).all():  # before the limit, which would clip an inf
+            raise Diverged(t, x, "the controller output a non-finite torque")
         if limit is not None:
             u = np.clip(u, -limit, limit)
         if t > furthest[0] + 0.005 * duration:
@@ -98,6 +98,8 @@ def run_continuous(
         reference = trajectory.reference(t)
         qdes[k], qddes[k] = reference.q, reference.qd
         torque[k] = controller.output(t, q[k], qd[k], reference, states[k])
+        if not np.isfinite(torque[k]).all():  # re-evaluated on the output grid: check again
+            diverged(t, q[k], qd[k], "the controller output a non-finite torque")
         if has_gains:
             gains = controller.diagnostics(states[k])
             phi[k], kappa[k] = gains.get("phi", np.nan), gains.get("kappa", np.nan)

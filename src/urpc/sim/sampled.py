@@ -51,6 +51,10 @@ def run_sampled(
         u = controller.output(t, q, qd, reference, state)
         next_state = controller.advance(t, q, qd, reference, state, period)
         step_times[k] = clock() - tic
+        # Before the torque limit (which would clip an inf to the limit) and at every sample,
+        # the last one included: a controller never hands out a non-finite torque silently.
+        if not u @ u < math.inf:  # NaN, inf, or so large that its square overflows
+            diverged(t, q, qd, "the controller output a non-finite or overflowing torque")
         q_series[k], qd_series[k] = q, qd
         qdes_series[k], qddes_series[k] = reference.q, reference.qd
         torque[k] = u
@@ -65,8 +69,6 @@ def run_sampled(
             clipped = np.clip(u, -limit, limit)
             saturated[k] = np.any(clipped != u)
             u = clipped
-        if not u @ u < math.inf:  # NaN or overflow; the plant refuses non-finite torques
-            diverged(t, q, qd, "non-finite or overflowing torque")
         try:
             q, qd = stepper.step(u + disturbance[k], period)
         except SimulationError:
