@@ -115,7 +115,7 @@ def _robots(request, rr_true, mixed) -> dict[str, Robot]:
         "rr_true": rr_true,
         "ur5": ur5,
         "ur5_payload": ur5.with_payload("payload", "wrist_3_link", PAYLOAD),
-        "ur5_locked": load_robot("ur5", locked_joints={"wrist_3_joint": 0.7, "elbow_joint": 7.0}),
+        "ur5_locked": load_robot("ur5", locked_joints={"wrist_3_joint": 0.7, "elbow_joint": 2.5}),
         "panda": request.getfixturevalue("panda"),
         "panda_open_fingers": load_robot(
             "panda", locked_joints={PANDA_FINGERS[0]: 0.02, PANDA_FINGERS[1]: 0.01}

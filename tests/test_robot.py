@@ -41,8 +41,7 @@ def test_example_robot_data_arms_load(ur5, panda):
     # The fingers' mass is carried by joint 7 after locking.
     hand_mass = sum(link.inertia.mass for link in panda.links if link.joint_index == 7)
     assert np.isclose(panda.model.inertias[7].mass, hand_mass)
-    full = load_robot("panda")
-    assert full.dof == 9
+    assert len(load_robot("panda", locked_joints=PANDA_FINGERS).joint_names) == 7
 
 
 def test_link_inertias_sum_to_pinocchio_bodies(panda):
@@ -146,3 +145,72 @@ def test_locked_joint_position_is_used():
     robot = load_robot("panda", locked_joints={name: 0.04 for name in PANDA_FINGERS})
     assert robot.locked_joints == {name: 0.04 for name in PANDA_FINGERS}
     assert robot.dof == 7
+
+
+# ----------------------------------------------------------------------------- URDF structure
+def test_a_mimic_joint_is_refused_unless_locked_with_its_leader():
+    """The Panda's second finger mimics the first: two independent joints would be simulated."""
+    with pytest.raises(InputError, match=r"panda\.urdf.*'panda_finger_joint2' mimics joint"):
+        load_robot("panda")
+    with pytest.raises(InputError, match="lock both"):
+        load_robot("panda", locked_joints=["panda_finger_joint2"])
+    assert load_robot("panda", locked_joints=PANDA_FINGERS).dof == 7
+
+
+def test_a_mimic_joint_in_a_urdf_file_names_file_and_joint(tmp_path):
+    second = """<link name="l2"><inertial><mass value="1"/>
+<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+<joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><axis xyz="0 0 1"/>
+<limit lower="-1" upper="1" effort="10" velocity="1"/><mimic joint="j1" multiplier="2"/></joint>"""
+    path = _write(tmp_path, _urdf(extra=second))
+    with pytest.raises(InputError, match=r"robot\.urdf: field 'joint\.j2\.mimic'.*'j2' mimics"):
+        load_robot(path)
+
+
+def test_a_closed_kinematic_loop_is_reported_as_such(tmp_path):
+    """A link with two parents (crashed the C++ URDF parser), and a cycle with no root."""
+    closing = """<joint name="closing" type="revolute"><parent link="l1"/><child link="base"/>
+<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="10" velocity="1"/></joint>"""
+    path = _write(tmp_path, _urdf(extra=closing))
+    with pytest.raises(InputError, match="closed kinematic loop.*form a cycle"):
+        load_robot(path)
+    second_parent = closing.replace('<child link="base"/>', '<child link="l1"/>')
+    path = _write(tmp_path, _urdf(extra=second_parent), "two_parents.urdf")
+    with pytest.raises(InputError, match="closed kinematic loop: link 'l1' is the child of"):
+        load_robot(path)
+
+
+# ----------------------------------------------------------------------------- locked joints
+def test_a_lock_outside_the_limits_is_refused_not_clipped(tmp_path):
+    with pytest.raises(InputError, match=r"cannot lock joint 'panda_joint1' at 10: outside"):
+        load_robot("panda", locked_joints={**dict.fromkeys(PANDA_FINGERS, 0.0), "panda_joint1": 10})
+    # A lock by name locks at 0; a joint whose limits exclude 0 is refused, naming them.
+    path = _write(tmp_path, _urdf().replace('lower="-1" upper="1"', 'lower="0.33" upper="2"'))
+    robot_with_two = path.read_text().replace(
+        "</robot>",
+        """<link name="l2"><inertial><mass value="1"/>
+<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+<joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><axis xyz="1 0 0"/>
+<origin xyz="0 0 0.2"/><limit lower="-1" upper="1" effort="10" velocity="1"/></joint></robot>""",
+    )
+    path.write_text(robot_with_two)
+    with pytest.raises(InputError, match=r"at 0 \(a lock given by name only.*\[0\.33, 2\]"):
+        load_robot(path, locked_joints=["j1"])
+    assert load_robot(path, locked_joints={"j1": 0.33}).locked_joints == {"j1": 0.33}
+
+
+def test_a_continuous_joint_can_be_locked_at_an_angle():
+    full = load_robot("double_pendulum_continuous")
+    locked = load_robot("double_pendulum_continuous", locked_joints={"joint1": 0.7})
+    assert locked.dof == 1 and locked.locked_joints == {"joint1": 0.7}
+    for angle in (0.3, -2.0):
+        np.testing.assert_allclose(
+            locked.g(np.array([angle])), full.g(np.array([0.7, angle]))[1:], atol=1e-12
+        )
+        np.testing.assert_allclose(
+            locked.M(np.array([angle])), full.M(np.array([0.7, angle]))[1:, 1:], atol=1e-12
+        )
+    by_name = load_robot("double_pendulum_continuous", locked_joints=["joint2"])
+    np.testing.assert_allclose(
+        by_name.g(np.array([0.4])), full.g(np.array([0.4, 0.0]))[:1], atol=1e-12
+    )

@@ -23,7 +23,7 @@ from .catalog import resolve_robot
 
 # inertia_problem: also imported from here by uncertainty, modular and studies.scenario.
 from .inertia import inertia_problem  # noqa: F401
-from .urdf import lock_joints, read_urdf_inertials
+from .urdf import check_mimic_joints, lock_joints, read_urdf_inertials
 
 #: Pinocchio joint models accepted (fixed joints are merged away by the URDF parser).
 _SUPPORTED = {
@@ -287,11 +287,13 @@ def load_robot(
         source: A URDF file, a built-in robot (``rr_planar``) or an example-robot-data URDF name
             (``ur5``, ``panda``, ...); ``urpc robots`` lists the names.
         locked_joints: Joints to lock (removed from the model), by name; a mapping gives the
-            locked position [rad or m], a sequence locks them at 0 (clipped into their limits).
+            locked position [rad or m] (an angle for a continuous joint), a sequence locks them
+            at 0. A position outside the joint's limits is refused, not clipped.
 
     Raises:
-        InputError: unknown robot, malformed URDF, unsupported joint type, unknown locked joint,
-            non-physical inertia in the URDF.
+        InputError: unknown robot, malformed URDF, unsupported joint type, a closed kinematic
+            loop, a mimic joint that is not locked with the joint it mimics, unknown locked joint
+            or a lock position outside the joint's limits, non-physical inertia in the URDF.
     """
     entry = resolve_robot(source)
     urdf_links = read_urdf_inertials(entry.urdf)
@@ -302,9 +304,10 @@ def load_robot(
     if isinstance(locked_joints, Mapping):
         locked = {str(k): float(v) for k, v in locked_joints.items()}
     else:
-        locked = {str(name): 0.0 for name in locked_joints}
+        locked = {str(name): None for name in locked_joints}
     if locked:
-        model = lock_joints(model, locked, entry.urdf)
+        model, locked = lock_joints(model, locked, entry.urdf)
+    check_mimic_joints(entry.urdf, locked)
     if model.nv == 0:
         raise InputError("the robot has no moving joint", source=entry.urdf, field="joint")
     links = []

@@ -16,12 +16,20 @@ from .inertia import inertia_problem
 _URDF_SUPPORTED = ("revolute", "continuous", "prismatic", "fixed")
 
 
-def lock_joints(model: pin.Model, locked: Mapping[str, float], urdf: Path) -> pin.Model:
-    """``model`` with the named 1-dof joints removed, each at its position [rad or m] clipped into
-    its limits (Pinocchio's ``buildReducedModel``)."""
+def lock_joints(
+    model: pin.Model, locked: Mapping[str, float | None], urdf: Path
+) -> tuple[pin.Model, dict[str, float]]:
+    """``model`` with the named joints removed (Pinocchio's ``buildReducedModel``), each fixed at
+    its position [rad or m]; ``None`` means 0. A continuous joint (Pinocchio's ``cos, sin`` pair)
+    is fixed at the angle. Returns the reduced model and the positions used.
+
+    Raises:
+        InputError: an unknown joint, a position outside the joint's limits (no silent clipping),
+            a joint type that cannot be locked.
+    """
     names = [model.names[j] for j in range(1, model.njoints)]
     reference = pin.neutral(model)
-    ids = []
+    ids, positions = [], {}
     for name, value in locked.items():
         if name not in names:
             raise InputError(
@@ -31,12 +39,109 @@ def lock_joints(model: pin.Model, locked: Mapping[str, float], urdf: Path) -> pi
             )
         j = model.getJointId(name)
         joint = model.joints[j]
-        if joint.nq != 1:
-            raise InputError(f"only 1-dof joints can be locked, not '{name}'", source=urdf)
-        lo, hi = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
-        reference[joint.idx_q] = min(max(value, lo), hi)
+        position = 0.0 if value is None else float(value)
+        if not np.isfinite(position):
+            raise InputError(
+                f"cannot lock joint '{name}' at {position}: give a finite position [rad or m]",
+                source=urdf,
+                field=f"locked_joints.{name}",
+            )
+        if joint.nq == 2 and joint.nv == 1:  # continuous: (cos, sin) of the angle
+            reference[joint.idx_q] = np.cos(position)
+            reference[joint.idx_q + 1] = np.sin(position)
+        elif joint.nq == 1:
+            lo = model.lowerPositionLimit[joint.idx_q]
+            hi = model.upperPositionLimit[joint.idx_q]
+            if not lo <= position <= hi:
+                given = (
+                    "0 (a lock given by name only locks at 0)"
+                    if value is None
+                    else f"{position:.6g}"
+                )
+                raise InputError(
+                    f"cannot lock joint '{name}' at {given}: outside its limits "
+                    f"[{lo:.6g}, {hi:.6g}] [rad or m]; give a position inside them (the API's "
+                    f"locked_joints={{'{name}': {np.clip(0.0, lo, hi):.6g}}} or a scenario's "
+                    f"locked_joints: {{{name}: ...}})",
+                    source=urdf,
+                    field=f"locked_joints.{name}",
+                )
+            reference[joint.idx_q] = position
+        else:
+            raise InputError(
+                f"joint '{name}' ({joint.shortname()}) cannot be locked: only revolute, "
+                "prismatic and continuous joints can",
+                source=urdf,
+                field="locked_joints",
+            )
         ids.append(j)
-    return pin.buildReducedModel(model, ids, reference)
+        positions[name] = position
+    return pin.buildReducedModel(model, ids, reference), positions
+
+
+def check_tree(root, path: Path) -> None:
+    """Refuse a closed kinematic loop: a link that is the child of two joints, or links that
+    form a cycle (no root, or links no root reaches). urpc models open chains (trees)."""
+    parents: dict[str, list[str]] = {}
+    children: dict[str, list[str]] = {}
+    for joint in root.findall("joint"):
+        parent, child = joint.find("parent"), joint.find("child")
+        if parent is None or child is None:
+            continue  # yourdfpy names the malformed joint
+        parents.setdefault(child.get("link"), []).append(joint.get("name"))
+        children.setdefault(parent.get("link"), []).append(child.get("link"))
+    for link, joints in parents.items():
+        if len(joints) > 1:
+            raise InputError(
+                f"closed kinematic loop: link '{link}' is the child of joints "
+                + " and ".join(f"'{j}'" for j in joints)
+                + "; urpc supports open chains (every link has at most one parent joint)",
+                source=path,
+                field=f"joint.{joints[1]}",
+            )
+    links = [link.get("name") for link in root.findall("link")]
+    reached = [link for link in links if link not in parents]  # the roots
+    for link in reached:  # reached grows while it is walked
+        reached.extend(c for c in children.get(link, ()) if c not in reached)
+    cycle = [link for link in links if link not in reached and link in parents]
+    if cycle:
+        raise InputError(
+            "closed kinematic loop: the links "
+            + ", ".join(f"'{link}'" for link in cycle)
+            + " form a cycle of joints ("
+            + ", ".join(f"'{parents[link][0]}'" for link in cycle)
+            + ") that no root link reaches; urpc supports open chains",
+            source=path,
+            field=f"joint.{parents[cycle[0]][0]}",
+        )
+
+
+def mimic_joints(path: Path) -> dict[str, str]:
+    """``{follower: leader}`` for every joint with a ``<mimic joint=...>`` element."""
+    import xml.etree.ElementTree as ElementTree
+
+    mimics = {}
+    for joint in ElementTree.parse(path).getroot().findall("joint"):
+        mimic = joint.find("mimic")
+        if mimic is not None:
+            mimics[joint.get("name")] = mimic.get("joint")
+    return mimics
+
+
+def check_mimic_joints(path: Path, locked: Mapping[str, float]) -> None:
+    """Refuse a mimic joint unless it and the joint it mimics are both locked: urpc would model
+    them as two independent degrees of freedom, which the real mechanism is not."""
+    for follower, leader in mimic_joints(path).items():
+        if follower in locked and leader in locked:
+            continue
+        raise InputError(
+            f"joint '{follower}' mimics joint '{leader}' (<mimic> in the URDF); urpc does not "
+            "model mimic joints and would simulate two independent joints: lock both "
+            f"(--lock {leader},{follower}, or locked_joints=['{leader}', '{follower}']) or "
+            "remove the <mimic> element",
+            source=path,
+            field=f"joint.{follower}.mimic",
+        )
 
 
 def read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
@@ -57,6 +162,8 @@ def read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
             f"not a URDF: the root element must be <robot name=...>, found <{root.tag}>",
             source=path,
         )
+    # Before yourdfpy and Pinocchio: a link with two parents crashes the C++ parser.
+    check_tree(root, path)
     try:
         urdf = yourdfpy.URDF.load(
             str(path), load_meshes=False, build_scene_graph=False, load_collision_meshes=False
