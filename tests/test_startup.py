@@ -28,11 +28,6 @@ def test_import_urpc_imports_no_heavy_module():
     assert not _imported_after("import urpc") & {*HEAVY, "numpy"}
 
 
-@pytest.mark.xfail(
-    strict=False,
-    reason="cli/campaign.register imports urpc.studies.scenario for PLANT_BACKENDS (its owner "
-    "is asked for a lean constant)",
-)
 def test_parsing_the_command_line_imports_no_heavy_module():
     code = (
         "from urpc.cli import build_parser\n"

@@ -16,7 +16,7 @@ from .common import (
 
 
 def register(commands) -> None:
-    from ..studies.scenario import PLANT_BACKENDS
+    from ..sim import PLANT_BACKENDS  # not studies.scenario: the argparse set-up stays lean
 
     p = commands.add_parser(
         "campaign",

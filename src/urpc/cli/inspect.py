@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from ..errors import InputError
 from .common import EXIT_OK, add_robot_arguments, print_json, vector
 
@@ -202,6 +200,8 @@ def _count(number: int, noun: str) -> str:
 
 
 def run_bound(args) -> int:
+    import numpy as np
+
     from ..bounds import default_method, make_bound
 
     robot, box, _ = load_robot_and_box(args)
