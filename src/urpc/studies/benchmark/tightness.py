@@ -36,7 +36,9 @@ def sample_points(box: ParameterBox, rng: np.random.Generator, n_uniform: int, n
     if n <= 10:
         points += [box.vertex(k) for k in range(2**n)]
     else:
-        points += [box.vertex(int(k)) for k in rng.integers(0, 2**n, size=n_vertices)]
+        # Random bits, as a Python integer (more than 63 coordinates overflow numpy's integers).
+        for bits in rng.integers(0, 2, size=(n_vertices, n)):
+            points.append(box.vertex(sum(int(b) << j for j, b in enumerate(bits))))
     return points
 
 
