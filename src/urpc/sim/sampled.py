@@ -1,5 +1,6 @@
 """The sampled closed loop: the controller's output held (zero-order hold) over each period with a
-disturbance drawn in a ball, the plant integrated by RK4 over the period."""
+disturbance (drawn in a ball, or of constant magnitude against the sliding variable ``r``), the
+plant integrated by RK4 over the period."""
 
 from __future__ import annotations
 
@@ -13,18 +14,36 @@ from ..errors import SimulationError
 from .closed_loop import RunSetup, diverged
 from .plants import Plant
 
+#: The disturbance models of a sampled run: ``ball`` draws ``d_k`` uniformly in ``||d|| <= D``
+#: (seeded); ``against`` holds ``d_k = -D r_k / ||r_k||``, magnitude ``D`` against the sliding
+#: variable ``r = (qd_d - qd) + Kr (q_d - q)`` of the sample (``0`` where ``r = 0``).
+DISTURBANCES = ("ball", "against")
+
 
 def run_sampled(
-    setup: RunSetup, stepper: Plant, period: float, disturbance_bound: float, seed: int
+    setup: RunSetup,
+    stepper: Plant,
+    period: float,
+    disturbance_bound: float,
+    seed: int,
+    disturbance_model: str = "ball",
 ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """The series (keyword arguments of :class:`~urpc.sim.results.SimulationResult`) and the
-    ``info`` of a run sampled with period ``period`` [s] on ``stepper``."""
+    ``info`` of a run sampled with period ``period`` [s] on ``stepper``, with the disturbance
+    ``disturbance_model`` (one of :data:`DISTURBANCES`) of magnitude ``disturbance_bound`` [N m]."""
     controller, trajectory = setup.controller, setup.trajectory
     q, qd, limit, bar = setup.q0, setup.qd0, setup.limit, setup.bar
     n = stepper.dof
     n_periods = max(1, math.ceil(setup.duration / period - 1e-9))
     samples = n_periods + 1
-    disturbance = ball_samples(samples, n, disturbance_bound, np.random.default_rng(seed))
+    against = disturbance_model == "against" and disturbance_bound > 0
+    if disturbance_model == "ball":
+        disturbance = ball_samples(samples, n, disturbance_bound, np.random.default_rng(seed))
+    elif disturbance_model == "against":
+        disturbance = np.zeros((samples, n))  # filled sample by sample
+        Kr = np.broadcast_to(np.asarray(getattr(controller, "Kr", 1.0), dtype=float), (n,))
+    else:
+        raise ValueError(f"unknown disturbance model {disturbance_model!r}; valid: {DISTURBANCES}")
     stepper.reset(q, qd)
 
     rate = 1.0 / period
@@ -58,6 +77,8 @@ def run_sampled(
         q_series[k], qd_series[k] = q, qd
         qdes_series[k], qddes_series[k] = reference.q, reference.qd
         torque[k] = u
+        if against:
+            disturbance[k] = against_r(reference.q - q, reference.qd - qd, Kr, disturbance_bound)
         if has_gains:
             if state is not gains_of:  # advance() returns the same array while nothing changes
                 named = controller.diagnostics(state)
@@ -103,7 +124,19 @@ def run_sampled(
         "substeps": substeps,
         "controller_state_final": np.asarray(state, dtype=float).tolist(),
     }
+    if disturbance_model != "ball":
+        info["disturbance_model"] = disturbance_model
     return series, info
+
+
+def against_r(e: np.ndarray, ed: np.ndarray, Kr: np.ndarray, magnitude: float) -> np.ndarray:
+    """``-magnitude r / ||r||`` with ``r = ed + Kr e`` [N m]: the constant-magnitude disturbance
+    pushing against the sliding variable (zero where ``r = 0``)."""
+    r = ed + Kr * e
+    norm = math.sqrt(r @ r)
+    if norm == 0.0:
+        return np.zeros_like(r)
+    return r * (-magnitude / norm)
 
 
 def ball_samples(count: int, dimension: int, radius: float, rng: np.random.Generator) -> np.ndarray:

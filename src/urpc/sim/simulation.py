@@ -40,7 +40,7 @@ from .continuous import CONTINUOUS_ATOL, CONTINUOUS_METHOD, CONTINUOUS_RTOL, run
 from .plants import PLANTS, make_plant
 from .progress import SimulationProgress
 from .results import SimulationResult
-from .sampled import run_sampled
+from .sampled import DISTURBANCES, run_sampled
 
 
 def simulate(
@@ -53,6 +53,7 @@ def simulate(
     qd0: np.ndarray | None = None,
     sample_period: float | None = None,
     disturbance_bound: float = 0.0,
+    disturbance: str = "ball",
     seed: int = 0,
     torque_limit: float | np.ndarray | None = None,
     epsilon: float | None = None,
@@ -80,6 +81,9 @@ def simulate(
         sample_period: Control period [s] (zero-order hold); ``None`` for continuous time.
         disturbance_bound: Radius [N m] of the ball the input disturbance is drawn from, once per
             sample (sampled runs only).
+        disturbance: ``"ball"`` (``d_k`` drawn uniformly in that ball) or ``"against"``
+            (``d_k = -disturbance_bound r_k / ||r_k||``, constant magnitude against the sliding
+            variable ``r = (qd_d - qd) + Kr (q_d - q)``, ``Kr`` the controller's or 1).
         seed: Seed of the disturbance generator (``numpy.random.default_rng``).
         torque_limit: Per-joint bound [N m] (scalar or ``dof`` values) the command is clipped to;
             ``None`` for no limit.
@@ -125,6 +129,11 @@ def simulate(
         raise InputError(
             f"{disturbance_bound!r} is out of range; expected a finite number >= 0 [N m]",
             field="disturbance_bound",
+        )
+    if disturbance not in DISTURBANCES:
+        raise InputError(
+            f"unknown disturbance {disturbance!r}; valid: {', '.join(DISTURBANCES)}",
+            field="disturbance",
         )
     limit = None
     if torque_limit is not None:
@@ -179,7 +188,9 @@ def simulate(
                 )
             step = positive_number("integration_step", integration_step, "a finite number > 0 [s]")
             stepper = make_plant(plant_backend, plant, max_step=step)
-            series, info = run_sampled(setup, stepper, period, disturbance_bound, int(seed))
+            series, info = run_sampled(
+                setup, stepper, period, disturbance_bound, int(seed), disturbance
+            )
             duration = float(series["t"][-1])
     finally:
         bar.close()
