@@ -106,3 +106,10 @@ def test_profile_control_step_parts():
         assert _positive_finite(times[part])
     assert "sampled_law" not in times  # the RR arm's scenario runs the paper's law
     assert "rr_planar" in format_profile(profile)
+
+
+def test_profile_control_step_of_the_implicit_law():
+    """The Panda's 1 kHz scenario runs the implicit law: its parts and the paper-law step."""
+    times = profile_control_step(["panda"], repeats=3)["panda"]
+    for part in ("output", "output_paper_law", "sampled_law", "inertia", "crba", "solve"):
+        assert _positive_finite(times[part]), part

@@ -133,14 +133,15 @@ def _profile_robot(robot_name: str, repeats: int) -> dict[str, float]:
     }
     if controller.implicit:
         # The private method is exactly what output() runs for the implicit law.
-        lower = controller.inertia_bounds.lower_robot
-        lower_data = lower.model.createData()
+        # Not ``lower``: that name is the enclosure the arithmetic replica reads.
+        lower_robot = controller.inertia_bounds.lower_robot
+        lower_data = lower_robot.model.createData()
         functions["sampled_law"] = lambda: controller._sampled_feedback(q, 1e3, r)
         paper = copy.copy(controller)  # shares the bound method; only the law differs
         paper.implicit = False
         functions["output_paper_law"] = lambda: paper.output(*args)
-        functions["inertia"] = lambda: lower.M(q)
-        functions["crba"] = lambda: pin.crba(lower.model, lower_data, config)
+        functions["inertia"] = lambda: lower_robot.M(q)
+        functions["crba"] = lambda: pin.crba(lower_robot.model, lower_data, config)
         shifted = M + 1e3 * controller.sample_period * np.eye(len(q))
         functions["solve"] = lambda: np.linalg.solve(shifted, M @ r)
     times = time_calls(functions, repeats)
