@@ -56,6 +56,7 @@ class FloorGrid:
         ]
         self.law_inverse = [np.linalg.inv(M) for M in self.law_inertia]
         #: ``||M_L^-1 dtau/dt||`` [rad/s^2 / s]: the held torque lags the reference by T/2.
+        self.trace_inverse = np.array([np.trace(Mi) for Mi in self.law_inverse])
         self.lag = np.array(
             [
                 np.linalg.norm(Mi @ rate)
@@ -175,7 +176,9 @@ class _Piece:
         self.lam_L, self.lam_U, self.beta, self.nu, self.gamma, self.drift = (
             np.full(count, math.inf) for _ in range(6)
         )
-        self.factors: list[np.ndarray | None] = []
+        #: ``U^T M_L_law^-1`` with ``M_U = U U^T``: ``||M^{1/2} M_L^-1 x|| <= ||U^T M_L^-1 x||``.
+        self.to_metric: list[np.ndarray | None] = []
+        self.lag_metric = np.full(count, math.inf)
         robot = grid.bound.robot
         self.links = [_link_vertices(robot, b) for b in box.uncertain_links]
         for j, q in enumerate(grid.q):
@@ -183,9 +186,11 @@ class _Piece:
             self.lam_L[j] = np.linalg.eigvalsh(ML)[0]
             self.lam_U[j] = np.linalg.eigvalsh(MU)[-1]
             if self.lam_L[j] <= 0:
-                self.factors.append(None)
+                self.to_metric.append(None)
                 self.beta[j] = -math.inf
                 continue
+            self.to_metric.append(np.linalg.cholesky(MU).T @ grid.law_inverse[j])
+            self.lag_metric[j] = np.linalg.norm(self.to_metric[j] @ grid.torque_rate[j])
             # The law predicts with the whole box's M_L: M_L_law >= beta M on this piece.
             self.beta[j] = scipy.linalg.eigh(grid.law_inertia[j], MU, eigvals_only=True)[0]
             self.nu[j] = max(
@@ -194,7 +199,6 @@ class _Piece:
             )
             # In the metric of M >= M_L: ||M^-1/2 X M^-1/2|| <= ||L^-1 X L^-T||, ||M^-1/2 x|| <= ||L^-1 x||.
             L = np.linalg.cholesky(ML)
-            self.factors.append(L)
             n = len(q)
             scaled = [_scaled(L, _scaled(L, C).T) for C in grid.coriolis[j]]
             self.gamma[j] = max(
@@ -209,10 +213,11 @@ class _Piece:
         )
         self._mismatch: dict[float, np.ndarray] = {}
 
-    def mismatch(self, tube: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def mismatch(self, tube: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Over this piece and the tube ``||e|| <= tube``, at each grid point, with ``w`` at
         ``r = 0`` (the part proportional to ``r`` is in ``b``): ``R_j >= ||M_L^-1 w||`` (``M_L``
-        the law's prediction inertia), ``V_j >= ||w||`` and ``S_j`` >= the rate of change of
+        the law's prediction inertia), ``RM_j >= ||M^{1/2} M_L^-1 w||`` for every plant of the
+        piece, ``V_j >= ||w||`` and ``S_j`` >= the rate of change of
         ``M_L^-1 w`` along the reference (finite difference to the next grid point).
 
         ``w = sum_l Y_l (pi_l - pi0_l)`` over uncertain links: per link, the maximum of a convex
@@ -223,16 +228,19 @@ class _Piece:
             grid = self.grid
             regressors = grid.regressors(tube)
             count = len(regressors)
-            R, V, S = np.zeros(count), np.zeros(count), np.zeros(count)
+            R, RM, V, S = (np.zeros(count) for _ in range(4))
             for j in range(count):
                 inverse = grid.law_inverse[j]
                 for Y in regressors[j]:
-                    equilibrium = magnitude = 0.0
+                    equilibrium = in_metric = magnitude = 0.0
                     for columns, A, vertices in self.links:
                         torques = Y[:, columns] @ A @ vertices
                         equilibrium += np.sqrt(np.max(np.sum((inverse @ torques) ** 2, axis=0)))
+                        image = self.to_metric[j] @ torques
+                        in_metric += np.sqrt(np.max(np.sum(image**2, axis=0)))
                         magnitude += np.sqrt(np.max(np.sum(torques**2, axis=0)))
                     R[j], V[j] = max(R[j], equilibrium), max(V[j], magnitude)
+                    RM[j] = max(RM[j], in_metric)
                 if j + 1 < count:
                     change = 0.0
                     for columns, A, vertices in self.links:
@@ -241,24 +249,31 @@ class _Piece:
                         change += np.sqrt(np.max(np.sum(step**2, axis=0)))
                     S[j] = change / grid.grid_step
             S[-1] = S[-2] if count > 1 else 0.0
-            self._mismatch[key] = (R, V, S)
+            self._mismatch[key] = (R, RM, V, S)
         return self._mismatch[key]
 
     def floor_at(self, T: float, d: float, tube: float, D: float) -> tuple[float, dict]:
         """The floor of this piece for a fixed tube (fixed point of ``||r||`` on the velocity).
 
-        Quasi-static split ``r = r* + delta`` with ``r* = (T K)^-1 T w`` the equilibrium of the
-        held loop for a frozen mismatch (``||r*|| <= T R + V / D``): ``delta`` is contracted by
-        ``1 - a + b`` per period and forced by the disturbance, by the motion of ``r*`` and by
-        ``b`` acting on ``r*`` (docs/sampled-data.md)."""
+        Split ``r = r* + r_d + delta``: ``r* = (T K)^-1 T w`` the equilibrium of the held loop
+        for a frozen mismatch (``||r*|| <= T R + V / D``); ``r_d`` the response to the
+        disturbance, ``sum_k (1 - M^-1 T K)^k M^-1 T d_k``, whose terms are positive
+        semi-definite matrices summing to ``(T K)^-1``, so ``||r_d|| <= T d tr((T K)^-1)`` for
+        any sequence ``||d_k|| <= d``; ``delta`` is contracted by ``1 - a + b`` per period and
+        forced by the motion of ``r*`` and by ``b`` acting on ``r`` (docs/sampled-data.md)."""
         grid, Kr = self.grid, self.grid.Kr
-        R, V, S = self.mismatch(tube)
+        R, RM, V, S = self.mismatch(tube)
         beta, lam_L, lam_U = self.beta, self.lam_L, self.lam_U
         a = beta * D * T / (D * T + beta * lam_U)
         speed = np.linalg.norm(grid.qd, axis=1) + Kr.max() * tube
         sqrt_L, sqrt_U = np.sqrt(lam_L), np.sqrt(lam_U)
         equilibrium = T * (R + 0.5 * T * grid.lag) + V / D
-        forcing = T * d / sqrt_L + sqrt_U * T * (T * S)
+        # tr((T K)^-1) = tr(M_L^-1) + n / (D T) for K = D (M_L + D T)^-1 M_L.
+        response = T * d * (grid.trace_inverse + len(Kr) / (D * T))
+        forcing = sqrt_U * T * (T * S)
+        # The same in the plant's metric, ||M^{1/2} x||, for b acting on them.
+        equilibrium_M = T * (RM + 0.5 * T * self.lag_metric) + sqrt_U * V / D
+        response_M = T * d / (a * sqrt_L)
         r_sup = 0.0
         for _ in range(50):
             b = T * (self.K * (0.5 + self.nu) + (1.0 + self.nu) * self.gamma * (speed + r_sup))
@@ -267,8 +282,9 @@ class _Piece:
                 parts = {"contraction": float(np.min(a)), "margin": margin, "gain_D": float(D)}
             if not margin > 0:
                 return math.inf, parts
-            deviation = float(np.max(forcing + b * sqrt_U * equilibrium)) / margin
-            new = float(equilibrium.max()) + (deviation + float(forcing.max())) / sqrt_L.min()
+            deviation = float(np.max(forcing + b * (equilibrium_M + response_M))) / margin
+            slow = float(np.max(equilibrium + response))
+            new = slow + (deviation + float(forcing.max())) / sqrt_L.min()
             if abs(new - r_sup) <= 1e-6 * new:
                 break
             r_sup = new
