@@ -326,6 +326,21 @@ def test_implicit_law_contracts_on_every_sampled_plant_for_every_gain():
     assert unstable_paper > 0  # the test would catch the paper's law
 
 
+def test_implicit_feedback_is_the_dense_formula_for_every_gain():
+    """The step's Cholesky form ``D (r - D T y)`` against ``D (M_L + D T)^-1 M_L r`` written out."""
+    T = 1e-3
+    _, _, controller = _panda_controller(T)
+    rng = np.random.default_rng(6)
+    for _ in range(5):
+        q, r = rng.uniform(-1, 1, 7), rng.normal(size=7)
+        ML = controller.inertia_bounds.lower(q)
+        for gain in (1.0, 50.0, 5e3, 1e6, 1e9):
+            dense = gain * np.linalg.solve(ML + gain * T * np.eye(7), ML @ r)
+            np.testing.assert_allclose(
+                controller._sampled_feedback(q, gain, r), dense, rtol=1e-8, atol=1e-9 * gain * T
+            )
+
+
 def test_implicit_law_tends_to_the_paper_law_as_the_period_vanishes():
     _, _, fast = _panda_controller(1e-15)
     _, _, paper = _panda_controller(None)

@@ -48,6 +48,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pinocchio as pin
+from scipy.linalg.lapack import dposv
 
 from ..bounds.base import BoundMethod
 from ..model.inertia_bounds import InertiaBounds
@@ -119,6 +121,7 @@ class IntervalPassivityController(Controller):
                 raise ValueError("the implicit sampled law needs the box's inertia bounds")
             self._lower_robot = inertia_bounds.lower_robot
             self._identity = np.eye(self.robot.dof)
+            self._diagonal = np.diag_indices(self.robot.dof)
             self.phi_max = max(
                 self.phi_P,
                 PHI_MAX_FACTOR * inertia_bounds.max_upper_eigenvalue / self.sample_period,
@@ -182,10 +185,18 @@ class IntervalPassivityController(Controller):
         return nominal + gain * r
 
     def _sampled_feedback(self, q: np.ndarray, gain: float, r: np.ndarray) -> np.ndarray:
-        """``D (M_L + D T 1)^{-1} M_L r`` [N m], the implicit feedback (one CRBA, one solve)."""
-        inertia = self._lower_robot.M(q)
+        """``D (M_L + D T 1)^{-1} M_L r = D (r - D T y)`` [N m] with ``(M_L + D T 1) y = r``: the
+        implicit feedback from one CRBA (its upper triangle) and one Cholesky solve (LAPACK
+        ``dposv``, which reads the upper triangle only)."""
+        lower = self._lower_robot
         step = gain * self.sample_period
-        return gain * np.linalg.solve(inertia + step * self._identity, inertia @ r)
+        shifted = pin.crba(lower.model, lower.data, lower.configuration(q))
+        shifted[self._diagonal] += step
+        _, y, info = dposv(shifted, r, lower=0)
+        if info != 0:  # M_L + D T 1 is not positive definite (an indefinite M_L): general solve
+            inertia = lower.M(q)
+            return gain * np.linalg.solve(inertia + step * self._identity, inertia @ r)
+        return gain * (r - step * y)
 
     def state_derivative(
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
