@@ -8,6 +8,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg.lapack import dposv
 
 from ...errors import InputError
 from .robots import BENCHMARK_ROBOTS
@@ -72,10 +73,11 @@ def profile_control_step(
 
     Parts of :meth:`IntervalPassivityController.output` (with the default, regressor-based
     method): ``regressor`` (``Y_SL``, the Pinocchio regressor calls), ``bound`` (the enclosure
-    from ``Y_SL``), ``nominal`` (``Y_SL pi0``), ``sampled_law`` (the implicit feedback: ``M_L(q)``
-    by CRBA and one symmetric solve; only with the implicit sampled-data law), of which
-    ``inertia`` (:meth:`Robot.M` of the lower-bound model: CRBA and symmetrization), ``crba``
-    (the bare Pinocchio call) and ``solve`` alone; ``arithmetic`` (a replica of the array arithmetic of ``output`` around those calls:
+    from ``Y_SL``), ``nominal`` (``Y_SL pi0``), ``sampled_law`` (the implicit feedback: ``M_L(q) + D T 1``
+    by one CRBA and one Cholesky solve; only with the implicit sampled-data law), of which
+    ``inertia`` (``M_L(q) + D T 1`` as the law builds it: the CRBA of the lower-bound model and
+    the diagonal shift), ``crba`` (the bare Pinocchio call) and ``solve`` (LAPACK ``dposv``)
+    alone; ``arithmetic`` (a replica of the array arithmetic of ``output`` around those calls:
     ``e``, ``qd_a``, ``qdd_a``, ``r``, ``rho``, its norm, the gain, the sum); ``other`` =
     ``output`` minus the parts (call overhead, and what the parts lose when they run together
     rather than alone); ``output_paper_law`` (the same step with the paper's law, so that the
@@ -122,7 +124,6 @@ def _profile_robot(robot_name: str, repeats: int) -> dict[str, float]:
 
     data = robot.model.createData()
     config = robot.configuration(q)
-    M = robot.M(q)
     functions: dict[str, Callable[[], object]] = {
         "output": lambda: controller.output(*args),
         "regressor": lambda: bound.regressor(q, qd, qd_a, qdd_a),
@@ -140,10 +141,18 @@ def _profile_robot(robot_name: str, repeats: int) -> dict[str, float]:
         paper = copy.copy(controller)  # shares the bound method; only the law differs
         paper.implicit = False
         functions["output_paper_law"] = lambda: paper.output(*args)
-        functions["inertia"] = lambda: lower_robot.M(q)
+        step, diagonal = 1e3 * controller.sample_period, np.diag_indices(len(q))
+
+        def inertia():
+            # M_L(q) + D T 1 as the law builds it: the raw CRBA (upper triangle), then the shift.
+            shifted = pin.crba(lower_robot.model, lower_data, lower_robot.configuration(q))
+            shifted[diagonal] += step
+            return shifted
+
+        functions["inertia"] = inertia
         functions["crba"] = lambda: pin.crba(lower_robot.model, lower_data, config)
-        shifted = M + 1e3 * controller.sample_period * np.eye(len(q))
-        functions["solve"] = lambda: np.linalg.solve(shifted, M @ r)
+        shifted = inertia().copy()
+        functions["solve"] = lambda: dposv(shifted, r, lower=0)
     times = time_calls(functions, repeats)
     parts = ("regressor", "bound", "nominal", "arithmetic", "sampled_law")
     times["other"] = times["output"] - sum(times.get(name, 0.0) for name in parts)
@@ -159,9 +168,9 @@ PROFILE_COLUMNS = (
     ("nominal", "nominal Y_SL pi0"),
     ("arithmetic", "array arithmetic"),
     ("sampled_law", "implicit law"),
-    ("inertia", "of which M_L(q)"),
+    ("inertia", "of which M_L(q) + D T 1"),
     ("crba", "of which bare crba"),
-    ("solve", "of which solve"),
+    ("solve", "of which solve (dposv)"),
     ("other", "other"),
     ("rnea", "RNEA"),
 )
