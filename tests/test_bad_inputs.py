@@ -146,6 +146,21 @@ CASES: dict[str, Case] = {
         {"arm.urdf": _rr_with(LINK2_INERTIA, '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="1"/>'), "box.yaml": "links: {link2: {mass: [5, 10]}}"},
         _check("{tmp}/arm.urdf", "{tmp}/box.yaml"), _load_box("arm.urdf", "box.yaml"), ("links.link2", "triangle inequality"), names_file="box.yaml",
     ),
+    # ------------------------------------------- boxes that describe no rigid body (issue 10.3)
+    "box_negative_principal_moment": _box_case("links: {link2: {ixx: [-1, 2]}}", "links.link2.ixx", "'link2'", "lower end -1 of ixx is negative", "no rigid body"),
+    "box_negative_mass_end_payload": _box_case("payload: {link: link2, mass: [-1, 3]}", "payload.mass", "non-negative"),
+    "box_barycentric_negative_diagonal": _box_case("links: {link2: {barycentric: {I_yy: [-1, 20]}}}", "links.link2.barycentric.I_yy", "'link2'", "negative"),
+    "box_barycentric_negative_mass": _box_case("links: {link2: {barycentric: {m: [-1, 20]}}}", "links.link2.barycentric.m", "strictly positive"),
+    "box_mass_overflowing_bound": _box_case("links: {link2: {mass: [5, 1e300]}}", "links.link2", "'link2'", "too large for a finite bound", "1e+300"),
+    "box_com_overflowing_bound": _box_case("links: {link2: {com_x: ['-1e200', '+1e200']}}", "links.link2", "too large for a finite bound"),
+    "box_payload_without_rigid_body": _box_case("payload: {link: link2, mass: [1, 2], ixx: [0, 0.1], iyy: [0, 0.1], izz: [1, 2]}", "payload", "not physical", "triangle inequality"),
+    "box_empty_file": _box_case("", "the file is empty", "links: {}"),
+    "box_comment_only_file": _box_case("# nothing uncertain?\n", "the file is empty", "links: {}"),
+    "box_expression_overflow": _box_case("links: {link2: {mass: ['+0', '10**10**10']}}", "links.link2.mass", "'10**10**10' overflows"),
+    "box_literal_overflow": _box_case("links: {link2: {mass: 1e309}}", "links.link2.mass", "'1e309' overflows"),
+    "box_disturbance_overflow": _box_case("disturbance: 1e309", "disturbance", "overflows"),
+    # ------------------------------------------------------------ API mistakes (issue 10.6)
+    "box_for_another_robot": Case({}, _check("ur5", str(RR_DIR / "uncertainty.yaml")), lambda tmp: urpc.load_uncertainty("rr_planar", urpc.load_robot("ur5")), ("this box is for robot 'rr_planar'", "not for 'ur5'", "field 'robot'"), names_file="uncertainty.yaml"),
     # ---------------------------------------------------------------- states and methods
     "bound_wrong_length": Case({}, _bound("0.1", "0,0", "0,0", "0,0"), None, ("--q has 1 values", "2 joints"), names_file=""),
     "bound_nan_state": Case({}, _bound("nan,0", "0,0", "0,0", "0,0"), _enclose([np.nan, 0], [0, 0], [0, 0], [0, 0]), ("finite",), names_file=""),
@@ -154,7 +169,7 @@ CASES: dict[str, Case] = {
     "bound_overflowing_state": Case({}, _bound("1e308,1e308", "1e308,1e308", "0,0", "0,0"), _enclose([1e308] * 2, [1e308] * 2, [0, 0], [0, 0]), ("overflow", "qd"), names_file=""),
     "bound_overflowing_state_hull": Case({}, _bound("0,0", "1e300,1", "1,1", "0,0", method="hull"), _enclose([0, 0], [1e300, 1], [1, 1], [0, 0], method="hull"), ("overflow",), names_file=""),
     "bound_overflowing_state_rigorous": Case({}, _bound("0.3,0.5", "1e200,1e200", "1e200,1e200", "0,0", method="rigorous"), _enclose([0.3, 0.5], [1e200] * 2, [1e200] * 2, [0, 0], method="rigorous"), ("overflow",), names_file=""),
-    "bound_unknown_method": Case({}, _bound("0,0", "0,0", "0,0", "0,0", method="interval"), lambda tmp: urpc.make_bound("interval", urpc.load_robot("rr_planar"), None), ("unknown bound method", "hull"), names_file=""),
+    "bound_unknown_method": Case({}, _bound("0,0", "0,0", "0,0", "0,0", method="interval"), lambda tmp: urpc.make_bound("interval", urpc.load_robot("rr_planar"), None), ("'interval'", "hull"), names_file=""),
 }  # fmt: skip
 
 

@@ -14,7 +14,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BeforeValidator, ValidationInfo, WithJsonSchema
 
-from ..expressions import evaluate
+from ..expressions import ExpressionOverflow, evaluate
 
 #: Plain arithmetic as text: numbers, ``pi``, ``+ - * / **`` and parentheses (``5/12``, ``1e-3``).
 EXPRESSION_PATTERN = r"^[-+*/().0-9eEpi\s]+$"
@@ -26,7 +26,12 @@ EXPRESSION_SCHEMA = {
 
 
 def finite_number(value: Any) -> float | None:
-    """The value of a number or of an arithmetic text, ``None`` if it is neither or not finite."""
+    """The value of a number or of an arithmetic text, ``None`` if it is neither or not finite.
+
+    Raises:
+        ExpressionOverflow: a text whose value is beyond the largest double (``1e309``): its
+            message says so, which "not a finite number" would hide.
+    """
     if isinstance(value, bool):
         return None
     if isinstance(value, int | float):
@@ -34,6 +39,8 @@ def finite_number(value: Any) -> float | None:
     elif isinstance(value, str):
         try:
             number = evaluate(value)
+        except ExpressionOverflow:
+            raise
         except ValueError:
             return None
     else:
@@ -196,6 +203,8 @@ def _number_or_fail(text: Any, raw: Any, what: str) -> float:
     if isinstance(text, str | int | float) and not isinstance(text, bool):
         try:
             return float(text) if not isinstance(text, str) else evaluate(text)
+        except ExpressionOverflow as exc:  # "'1e309' overflows: ...", not "not a number"
+            raise ValueError(f"{exc}; expected {what}") from None
         except ValueError:
             pass
     raise ValueError(f"{raw!r} is not a number; expected {what}")

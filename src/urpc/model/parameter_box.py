@@ -61,6 +61,9 @@ class LinkBox:
             (coordinates :data:`BARYCENTRIC_FIELDS`).
         nominal: The nominal point, 10 coordinates of ``kind``.
         lower, upper: The box, 10 coordinates of ``kind`` each; exact fields have lower == upper.
+        non_physical: Which part of the box is no rigid body (``None``: every point is one); the
+            bound covers the whole box, a superset of its rigid bodies
+            (:mod:`urpc.model.box_consistency`).
     """
 
     link: str
@@ -68,6 +71,7 @@ class LinkBox:
     nominal: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
+    non_physical: str | None = None
 
     @property
     def fields(self) -> tuple[str, ...]:

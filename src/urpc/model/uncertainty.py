@@ -25,6 +25,7 @@ robot (link names, URDF nominal values, physical consistency). The box values li
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -44,6 +45,13 @@ from ..formats.uncertainty import (
     UncertaintyFile,
 )
 from ..formats.values import Interval
+from .box_consistency import (
+    NonPhysicalBoxWarning,
+    corner_check,
+    describe_non_physical_part,
+    negative_lower_end,
+    too_large,
+)
 from .catalog import shipped_file
 from .inertia import inertia_problem
 from .parameter_box import (
@@ -63,6 +71,7 @@ __all__ = [
     "PHYSICAL_FIELDS",
     "UNITS",
     "LinkBox",
+    "NonPhysicalBoxWarning",
     "ParameterBox",
     "Payload",
     "barycentric_from_physical",
@@ -86,14 +95,56 @@ def load_uncertainty(path: str | Path, robot: Robot) -> ParameterBox:
             a wrong type, lo > hi, a non-positive mass, a nominal outside its box, a
             non-physical nominal inertia.
     """
+    _check_arguments(path, robot, "load_uncertainty", "parse_uncertainty")
     path = shipped_file(path, "uncertainty.yaml", "uncertainty box")
-    return parse_uncertainty(read_yaml(path), robot, source=str(path))
+    document = read_yaml(path)
+    if document is None:
+        raise InputError(
+            "the file is empty; an empty file is not read as 'no uncertainty': write "
+            "'links: {}' to say every parameter is exact, or list the uncertain links",
+            source=path,
+        )
+    return parse_uncertainty(document, robot, source=str(path))
+
+
+def _check_arguments(path: Any, robot: Any, function: str, parser: str | None) -> None:
+    """Typed errors for API mistakes: a document instead of a path, something else than a
+    :class:`~urpc.model.robot.Robot`."""
+    if not isinstance(path, str | Path):
+        instead = f"; for an already parsed document use urpc.{parser}(document, robot)"
+        raise InputError(
+            f"{function}() reads a file: expected a path or a shipped name (str or Path), got "
+            f"{type(path).__name__}" + (instead if parser and isinstance(path, Mapping) else ""),
+            field="path",
+        )
+    if not isinstance(robot, Robot):
+        raise InputError(
+            f"expected a Robot (urpc.load_robot(...)), got {type(robot).__name__} {robot!r:.60}",
+            field="robot",
+        )
 
 
 def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) -> ParameterBox:
-    """Validate an uncertainty document (already parsed YAML) against ``robot``."""
+    """Validate an uncertainty document (already parsed YAML) against ``robot``.
+
+    Raises:
+        InputError: as :func:`load_uncertainty`, and a box whose ``robot:`` names another robot
+            ("this box is for robot X").
+    """
+    if not isinstance(robot, Robot):
+        raise InputError(
+            f"expected a Robot (urpc.load_robot(...)), got {type(robot).__name__}", field="robot"
+        )
     hints = {"payload.link": robot.moving_link_names}
     spec = validate(UncertaintyFile, document, source, hints=hints)
+    if spec.robot is not None and not _same_robot(spec.robot, robot):
+        raise InputError(
+            f"this box is for robot '{spec.robot}', not for '{robot.name}' (URDF "
+            f"{robot.urdf_path.name}); give a box written for {robot.name} (urpc init "
+            f"{robot.name} --out box.yaml starts one)",
+            source=source,
+            field="robot",
+        )
     boxes: list[LinkBox] = []
     payloads: list[Payload] = []
     if spec.payload is not None:
@@ -124,6 +175,15 @@ def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) ->
         source=source,
         robot_name=robot.name,
     )
+
+
+def _same_robot(declared: str, robot: Robot) -> bool:
+    """Whether a box's ``robot:`` may name ``robot``: its name, its URDF's robot name or file
+    stem; a URDF path (``urpc init path/arm.urdf`` writes one) is compared by file stem only."""
+    text = declared.strip()
+    if text.endswith(".urdf") or "/" in text or "\\" in text:
+        return Path(text).stem == robot.urdf_path.stem
+    return text in {robot.name, robot.model.name, robot.urdf_path.stem}
 
 
 def _payload(entry: PayloadEntry, robot: Robot, source: str | None) -> tuple[Payload, LinkBox]:
@@ -201,15 +261,36 @@ def resolve_link_box(
             field=f"{prefix}.{keys[0]}",
         )
     box = LinkBox(name, kind, values, lower, upper)
+    negative = negative_lower_end(box)
+    if negative is not None:
+        key, message = negative
+        raise InputError(f"the box of '{name}': {message}", source=source, field=f"{prefix}.{key}")
+    problem = too_large(box)
+    if problem:
+        raise InputError(f"the box of '{name}': {problem}", source=source, field=prefix)
     inertia = box.nominal_inertia
     # Barycentric: I_C = I_O - m S(c)^T S(c); physical iff the pseudo-inertia is PSD.
     massless = kind == "barycentric" and inertia.mass <= 0
     problem = inertia_problem(np.zeros((3, 3)) if massless else np.asarray(inertia.inertia))
     if problem:
+        # The nominal lies in its box: a box whose nominal is a rigid body has one in it.
         raise InputError(
             f"the nominal inertia of '{name}' is not physical: {problem}",
             source=source,
             field=prefix,
+        )
+    check = corner_check(box)
+    if not check.all_physical:
+        part = describe_non_physical_part(box, check)
+        box = LinkBox(name, kind, values, lower, upper, non_physical=part)
+        where = ": ".join([*([source] if source else []), f"field '{prefix}'"])
+        warnings.warn(
+            NonPhysicalBoxWarning(
+                f"{where}: part of the box of '{name}' is no rigid body: {part}; accepted, as the "
+                "bound over the whole box (a superset of its rigid bodies) stays sound, but "
+                "narrow the intervals to state only rigid bodies"
+            ),
+            stacklevel=2,
         )
     return box
 
