@@ -92,7 +92,7 @@ def results_markdown(document: dict) -> str:
     lines += [
         "",
         "`met`: `||e|| < epsilon` from `entry time` to the end, and at least over the final "
-        "quarter of the run. `final error`: max `||e||` over the last second. `torque variation`: "
+        "quarter of the run. `final error`: max `||e||` over the last second (the last quarter of a run shorter than 4 s). `torque variation`: "
         "total variation of the commanded torque per second (the chattering index; sampled runs "
         "are recorded at their control rate, continuous ones at 1 kHz).",
         "",
