@@ -74,6 +74,9 @@ def run_campaign(
                 report.advance()
         else:
             outcomes = _run_pool(tasks, workers, report)
+    except BaseException:
+        report.close(failed=True)  # no bar left above the error line
+        raise
     finally:
         report.close()
     outcomes.sort(key=lambda o: o.spec.index)

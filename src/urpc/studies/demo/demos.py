@@ -67,7 +67,7 @@ def reconfigure_demo(
     out = None if out_dir is None else Path(out_dir)
     folders = configuration_folders(out, configurations)
     runs = []
-    with ProgressReporter(progress, "reconfigure") as report:
+    with ProgressReporter(progress, "reconfigure", len(configurations)) as report:
         for i, (configuration, folder) in enumerate(zip(configurations, folders, strict=True)):
             runs.append(
                 run_configuration(

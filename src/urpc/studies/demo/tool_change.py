@@ -219,7 +219,7 @@ def tool_change_run(
     clock, qd0, state = 0.0, None, None
     q0 = initial_position(trajectory, initial_offset)
     states = []
-    with ProgressReporter(progress, "tool change") as report:
+    with ProgressReporter(progress, "tool change", len(plan)) as report:
         for k, (plant, controller, stop) in enumerate(plan):
             if segments and controller is not plan[k - 1][1]:
                 states.append(state)

@@ -3,11 +3,12 @@ process, and their progress."""
 
 from __future__ import annotations
 
-import sys
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
+
+from ...sim.progress import Progress, report_labelled
 
 #: The paper's scenarios (Table II number, initial condition) in report order.
 PAPER_RUNS = tuple((number, ic) for number in (1, 2, 3) for ic in (1, 2))
@@ -52,10 +53,10 @@ def run_one(number: int, ic: int, controller: str, duration: float | None, scrat
 def run_all(jobs, duration, scratch: Path, workers: int, reporter) -> dict:
     runs = {}
     if workers == 1:
-        for job in jobs:
-            runs[job] = run_one(*job, duration, str(scratch))
-            reporter.done(_label(job))
-        reporter.close()
+        with reporter:
+            for job in jobs:
+                runs[job] = run_one(*job, duration, str(scratch))
+                reporter.done(_label(job))
         return runs
     with ProcessPoolExecutor(max_workers=workers) as pool:
         futures = {pool.submit(run_one, *job, duration, str(scratch)): job for job in jobs}
@@ -66,6 +67,7 @@ def run_all(jobs, duration, scratch: Path, workers: int, reporter) -> dict:
                 runs[job] = future.result()
                 reporter.done(_label(job))
         except BaseException:
+            reporter.close(failed=True)  # no bar left above the error line
             for future in futures:
                 future.cancel()
             raise
@@ -79,31 +81,21 @@ def _label(job) -> str:
     return f"scenario {number} IC{ic} {controller}"
 
 
-class RunReporter:
-    """Progress over runs: a tqdm bar on stderr, a callable, or nothing."""
+class RunReporter(Progress):
+    """Progress over runs: a tqdm bar on stderr, a callable ``(finished, total, label)``, or
+    nothing (:class:`urpc.sim.progress.Progress`)."""
 
     def __init__(self, progress, total: int):
-        self.progress, self.total, self.finished, self.bar = progress, total, 0, None
+        super().__init__(
+            progress, total, description="reproduce-paper", unit="run", report=report_labelled
+        )
 
     def open(self) -> None:
-        if self.progress is True and self.bar is None:
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=self.total, file=sys.stderr, unit="run", desc="reproduce-paper")
+        self.start()
 
     def done(self, label: str) -> None:
-        self.open()
-        self.finished += 1
-        if self.bar is not None:
-            self.bar.set_postfix_str(label, refresh=False)
-            self.bar.update(1)
-        elif callable(self.progress):
-            self.progress(self.finished, self.total, label)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-            self.bar = None
+        """One more run finished, named ``label``."""
+        self.advance(1, label)
 
 
 def design_conditions(controller) -> dict[str, Any]:
