@@ -167,22 +167,31 @@ def test_load_rejects_a_directory_without_a_result(tmp_path):
 
 
 def test_plot_returns_labelled_headless_figures(result, tmp_path):
+    # The titles are figure titles (suptitle, two lines, so that none is cut); the error figure
+    # has a second panel (||e|| / epsilon), the torque figure one panel per joint, and the gains
+    # figure is new (the expectations changed with these figures).
     figures = result.plot()
-    assert set(figures) == {"trajectory", "error", "torque"}
+    assert set(figures) == {"trajectory", "error", "torque", "gains"}
     for name, figure in figures.items():
         assert isinstance(figure, Figure)
-        axes = figure.axes[0]
+        axes = figure.axes[-1]
         assert "[s]" in axes.get_xlabel()
-        assert "interval" in axes.get_title() and "scenario 3" in axes.get_title()
-        assert axes.get_legend() is not None
+        title = figure.get_suptitle() or figure.axes[0].get_title()
+        assert "interval" in title and "scenario 3" in title
         figure.savefig(tmp_path / f"{name}.png")
         assert (tmp_path / f"{name}.png").stat().st_size > 1000
+    assert figures["trajectory"].axes[0].get_legend() is not None
     error_axes = figures["error"].axes[0]
+    assert error_axes.get_legend() is not None
     assert error_axes.get_yscale() == "log" and "[rad]" in error_axes.get_ylabel()
     assert any(
         np.allclose(line.get_ydata(), 1e-2) for line in error_axes.get_lines()
     )  # the epsilon line
-    assert "[N m]" in figures["torque"].axes[0].get_ylabel()
+    assert [a.get_ylabel() for a in figures["torque"].axes] == ["$u_{1}$ [N m]", "$u_{2}$ [N m]"]
+    assert [a.get_ylabel() for a in figures["gains"].axes] == [
+        "$\\phi$ [N m s/rad]",
+        "$\\kappa$ [s/rad]",
+    ]
     assert "[rad]" in figures["trajectory"].axes[0].get_ylabel()
 
 

@@ -5,8 +5,10 @@ headless (no display, no global figure registry); save it with ``figure.savefig(
 
 * :func:`plot_reference` - the desired joint trajectory alone (Fig. 1);
 * :func:`plot_trajectory` - the desired joint trajectory of a run, with the actual one;
-* :func:`plot_error` - ``||e||`` on a log scale with the ``epsilon`` line (Figs. 2, 3);
-* :func:`plot_torque` - the commanded joint torques (Figs. 2-5);
+* :func:`plot_error` - ``||e||`` on a log scale with the ``epsilon`` line (Figs. 2, 3), above
+  ``||e|| / epsilon`` on a linear scale with the final window's maximum (the margin to epsilon);
+* :func:`plot_torque` - the commanded joint torques, one panel per joint (Figs. 2-5);
+* :func:`plot_gains` - the adaptive gains ``phi`` and ``kappa`` over time;
 * :func:`plot_overview` - error and torques of one run stacked (Figs. 2, 3);
 * :func:`plot_errors` - error norms of several runs overlaid, with ``epsilon`` (e.g. both
   initial conditions of one scenario);
@@ -26,8 +28,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 _JOINT_STYLES = ("-", "--", "-.", ":")
-_FLOOR = 1e-12  # [rad] floor of log-scale error plots (an exact zero has no logarithm)
 _DECADES_BELOW_EPSILON = 1e-6  # error plots show at most 6 decades below epsilon
+_TITLE_SIZE = 10
 
 
 class Run(Protocol):
@@ -42,6 +44,8 @@ class Run(Protocol):
     sample_period: float | None  # [s], None for continuous time
     scenario: str
     disturbance_bound: float  # [N m]
+    phi: np.ndarray  # [N m s/rad], (K,), NaN for controllers without adaptive gains
+    kappa: np.ndarray  # [s/rad], (K,)
 
     @property
     def dof(self) -> int: ...
@@ -105,21 +109,81 @@ def plot_reference(
 
 def plot_error(result: Run) -> Figure:
     """``||e(t)||`` [rad] on a log scale with the required precision ``epsilon`` and the entry
-    time (Figs. 2, 3)."""
-    figure = Figure(figsize=(7.0, 3.6), layout="constrained")
-    axes = figure.add_subplot()
-    _error_axes(axes, [result], labels=[result.controller])
-    axes.set_title(f"Tracking error - {describe(result)}")
+    time (Figs. 2, 3), above the margin to epsilon: ``||e(t)|| / epsilon`` on a linear scale, with
+    the final window of ``final_error`` (:func:`urpc.sim.metrics.final_window`) shaded and its
+    maximum written as a fraction of epsilon."""
+    figure = Figure(figsize=(7.0, 5.2), layout="constrained")
+    top, bottom = figure.subplots(2, 1, sharex=True, height_ratios=(3, 2))
+    _error_axes(top, [result], labels=[result.controller])
+    top.set_xlabel("")
+    _margin_axes(bottom, result)
+    figure.suptitle(f"Tracking error\n{describe(result)}", fontsize=_TITLE_SIZE)
     return figure
 
 
 def plot_torque(result: Run) -> Figure:
-    """Commanded joint torques ``u(t)`` [N m] (Figs. 2-5)."""
-    figure = Figure(figsize=(7.0, 3.6), layout="constrained")
-    axes = figure.add_subplot()
-    _torque_axes(axes, result, label_prefix="")
-    axes.set_title(f"Commanded torque - {describe(result)}")
-    axes.legend(ncol=min(result.dof, 4), fontsize="small")
+    """Commanded joint torques ``u_i(t)`` [N m] ([N] for a prismatic joint), one panel per joint
+    so that no joint hides another (Figs. 2-5)."""
+    dof = result.dof
+    figure = Figure(figsize=(7.0, 1.2 + 1.5 * dof), layout="constrained")
+    axes = np.atleast_1d(figure.subplots(dof, 1, sharex=True))
+    units = _torque_units(result)
+    for i, ax in enumerate(axes):
+        ax.plot(result.t, result.torque[:, i], lw=0.7, color=f"C{i % 10}")
+        ax.set_ylabel(f"$u_{{{i + 1}}}$ [{units[i]}]")
+        ax.grid(True, alpha=0.3)
+    axes[-1].set_xlabel("time [s]")
+    figure.suptitle(f"Commanded torque\n{describe(result)}", fontsize=_TITLE_SIZE)
+    return figure
+
+
+def plot_gains(result: Run) -> Figure:
+    """The adaptive gains over time: ``phi(t)`` [N m s/rad], which scales the damping of the
+    sliding variable, and ``kappa(t)`` [s/rad], which scales the robust term; both grow while
+    ``||e|| >= epsilon`` and freeze inside the ball. A controller without adaptive gains (NaN
+    series) gets a note instead of curves."""
+    figure = Figure(figsize=(7.0, 4.6), layout="constrained")
+    top, bottom = figure.subplots(2, 1, sharex=True)
+    phi = np.asarray(result.phi, dtype=float)
+    kappa = np.asarray(result.kappa, dtype=float)
+    for ax, series, name, unit, color in (
+        (top, phi, "\\phi", "N m s/rad", "tab:blue"),
+        (bottom, kappa, "\\kappa", "s/rad", "tab:purple"),
+    ):
+        if series.size and np.isfinite(series).any():
+            ax.plot(result.t, series, lw=1.0, color=color)
+            final = float(series[np.isfinite(series)][-1])
+            ax.annotate(
+                f"final {final:.4g} {unit}",
+                xy=(1.0, 1.0),
+                xycoords="axes fraction",
+                xytext=(-4, -4),
+                textcoords="offset points",
+                ha="right",
+                va="top",
+                fontsize="small",
+            )
+        else:
+            ax.text(
+                0.5,
+                0.5,
+                f"no adaptive ${name}$ ({result.controller} controller)",
+                ha="center",
+                va="center",
+                transform=ax.transAxes,
+            )
+        ax.set_ylabel(f"${name}$ [{unit}]")
+        ax.ticklabel_format(axis="y", useOffset=False)  # 2.0008, not "+2" and 0.0008
+        ax.grid(True, alpha=0.3)
+    entry = result.metrics["entry_time"]
+    if entry is not None:
+        for ax in (top, bottom):
+            ax.axvline(entry, color="tab:green", ls=":", lw=1.0)
+    bottom.set_xlabel("time [s]")
+    figure.suptitle(
+        f"Adaptive gains (they grow while $\\|e\\| \\geq \\varepsilon$)\n{describe(result)}",
+        fontsize=_TITLE_SIZE,
+    )
     return figure
 
 
@@ -131,7 +195,6 @@ def plot_overview(result: Run) -> Figure:
     _error_axes(top, [result], labels=[result.controller])
     top.set_xlabel("")
     _torque_axes(bottom, result, label_prefix="")
-    bottom.legend(ncol=min(result.dof, 4), fontsize="small")
     figure.suptitle(describe(result))
     return figure
 
@@ -208,20 +271,31 @@ def compare(
     return figure
 
 
+def positive_for_log(values: np.ndarray) -> np.ndarray:
+    """``values`` with exact zeros (a run starting on the reference has ``||e(0)|| = 0``) as NaN,
+    so that a log axis starts at the first positive sample instead of a spike from the floor."""
+    values = np.asarray(values, dtype=float)
+    return np.where(values > 0, values, np.nan)
+
+
+def log_error_limits(norms: Sequence[np.ndarray], epsilon: float) -> tuple[float, float]:
+    """Limits of a log axis of error norms [rad] with an ``epsilon`` line: from half the smallest
+    positive error (at most 6 decades below epsilon) to twice the larger of epsilon and the
+    largest error, so that the epsilon line never lies on the frame."""
+    positive = [n[n > 0] for n in (np.asarray(n, dtype=float) for n in norms)]
+    positive = [p[np.isfinite(p)] for p in positive if p.size]
+    smallest = min((float(p.min()) for p in positive if p.size), default=epsilon)
+    largest = max((float(p.max()) for p in positive if p.size), default=epsilon)
+    bottom = 0.5 * max(min(smallest, epsilon), _DECADES_BELOW_EPSILON * epsilon)
+    return bottom, 2.0 * max(largest, epsilon)
+
+
 def _error_axes(axes: Axes, results: Sequence[Run], labels: Sequence[str]) -> None:
     epsilons = set()
-    smallest = np.inf
     for result, label in zip(results, labels, strict=True):
-        norm = result.error_norm
-        axes.semilogy(result.t, np.maximum(norm, _FLOOR), lw=0.9, label=label)
+        axes.semilogy(result.t, positive_for_log(result.error_norm), lw=0.9, label=label)
         epsilons.add(float(result.epsilon))
-        positive = norm[norm > 0]
-        if positive.size:
-            smallest = min(smallest, float(positive.min()))
-    # An exact zero (a run starting on the reference) would stretch the axis down to the floor.
-    bottom = max(smallest, _DECADES_BELOW_EPSILON * min(epsilons))
-    if np.isfinite(bottom):
-        axes.set_ylim(bottom=0.5 * bottom)
+    axes.set_ylim(*log_error_limits([r.error_norm for r in results], min(epsilons)))
     for epsilon in sorted(epsilons):
         axes.axhline(epsilon, color="k", ls="--", lw=1.0, label=f"$\\varepsilon$ = {epsilon:g} rad")
     if len(results) == 1:
@@ -233,14 +307,63 @@ def _error_axes(axes: Axes, results: Sequence[Run], labels: Sequence[str]) -> No
     axes.legend(fontsize="small")
 
 
+def _margin_axes(axes: Axes, result: Run) -> None:
+    """``||e|| / epsilon`` on a linear axis (1 = the epsilon line), the final window shaded and
+    its maximum written as a fraction of epsilon: a steady 0.9993 epsilon reads as such."""
+    from .metrics import describe_final_window, final_window
+
+    t = np.asarray(result.t, dtype=float)
+    ratio = np.asarray(result.error_norm, dtype=float) / result.epsilon
+    axes.plot(t, ratio, lw=0.9, color="tab:blue")
+    axes.axhline(1.0, color="k", ls="--", lw=1.0)
+    span = float(t[-1] - t[0])
+    start = t[-1] - final_window(span)
+    final = ratio[t >= start]
+    axes.axvspan(start, t[-1], color="tab:orange", alpha=0.15, lw=0)
+    worst = float(final.max())
+    margin = 1.0 - worst
+    axes.annotate(
+        f"final max {worst:.4g} $\\varepsilon$ over {describe_final_window(span)}: "
+        + (f"margin {100 * margin:.3g} % of $\\varepsilon$" if margin > 0 else "ABOVE epsilon"),
+        xy=(1.0, 1.0),
+        xycoords="axes fraction",
+        xytext=(-4, -4),
+        textcoords="offset points",
+        ha="right",
+        va="top",
+        fontsize="small",
+        bbox={"boxstyle": "round", "fc": "white", "ec": "0.7", "alpha": 0.9},
+    )
+    finite = ratio[np.isfinite(ratio)]
+    # Linear, up to 1.5 epsilon: the transient is on the log panel above.
+    axes.set_ylim(0.0, max(1.5, 1.25 * worst) if finite.size else 1.5)
+    axes.set(xlabel="time [s]", ylabel="$\\|e\\| / \\varepsilon$")
+    axes.grid(True, alpha=0.3)
+
+
+def _torque_units(result: Run) -> list[str]:
+    """Per joint: ``N m`` for a revolute joint, ``N`` for a prismatic one (the run's
+    ``info["joint_kinds"]`` when recorded, revolute otherwise)."""
+    info = getattr(result, "info", None) or {}
+    kinds = info.get("joint_kinds") or ("revolute",) * result.dof
+    return ["N" if kind == "prismatic" else "N m" for kind in kinds]
+
+
 def _torque_axes(axes: Axes, result: Run, label_prefix: str) -> None:
-    for i in range(result.dof):
+    # Joint 1 last, so that it is drawn on top; thin, slightly transparent lines so that a
+    # chattering joint does not hide another.
+    for i in reversed(range(result.dof)):
         axes.plot(
             result.t,
             result.torque[:, i],
             ls=_JOINT_STYLES[i % len(_JOINT_STYLES)],
-            lw=0.9,
+            lw=0.7,
+            alpha=0.8,
+            color=f"C{i % 10}",
             label=f"{label_prefix}$u_{i + 1}$",
         )
-    axes.set(xlabel="time [s]", ylabel="torque [N m]")
+    handles, labels = axes.get_legend_handles_labels()
+    axes.legend(handles[::-1], labels[::-1], ncol=min(result.dof, 4), fontsize="small")
+    units = sorted(set(_torque_units(result)), reverse=True)
+    axes.set(xlabel="time [s]", ylabel=f"torque [{', '.join(units)}]")
     axes.grid(True, alpha=0.3)

@@ -233,15 +233,42 @@ class SimulationResult:
     # ------------------------------------------------------------------ figures
     def plot(self) -> dict[str, Any]:
         """Figures of this run: ``trajectory`` (desired and actual joint positions), ``error``
-        (``||e||`` on a log scale with the epsilon line) and ``torque`` (commanded torques), as
-        :class:`matplotlib.figure.Figure` objects (headless; save them with ``savefig``)."""
-        from .plotting import plot_error, plot_torque, plot_trajectory  # loads matplotlib
+        (``||e||`` on a log scale with the epsilon line, and ``||e|| / epsilon``), ``torque``
+        (commanded torques, one panel per joint) and ``gains`` (``phi`` and ``kappa`` over time),
+        as :class:`matplotlib.figure.Figure` objects (headless; save them with ``savefig``)."""
+        from .plotting import plot_error, plot_gains, plot_torque, plot_trajectory
 
         return {
             "trajectory": plot_trajectory(self),
             "error": plot_error(self),
             "torque": plot_torque(self),
+            "gains": plot_gains(self),
         }
+
+
+def check_writable(directory: str | Path) -> Path:
+    """Check, without creating anything, that ``directory`` can be written (it exists as a
+    writable folder, or its nearest existing ancestor is one); returns it as an absolute path.
+    Every command that writes files calls it before any work starts.
+
+    Raises:
+        InputError: naming the folder that is in the way.
+    """
+    directory = Path(directory).expanduser().absolute()
+    if directory.exists() and not directory.is_dir():
+        raise InputError(
+            "exists and is not a folder; give a folder for the outputs", source=directory
+        )
+    target = directory if directory.exists() else directory.parent
+    while not target.exists():
+        target = target.parent
+    if not target.is_dir() or not os.access(target, os.W_OK | os.X_OK):
+        raise InputError(
+            f"cannot create the output folder: '{target}' is not a writable folder; choose "
+            "another --out",
+            source=directory,
+        )
+    return directory
 
 
 def write_files(directory: str | Path, writers: Mapping[str, Callable[[Path], None]]) -> Path:

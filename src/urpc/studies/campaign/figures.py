@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from ...wording import count
+
 
 def plot_campaign(rows: Sequence[Mapping[str, Any]], summary: Mapping[str, Any]):
     """The figure of :meth:`urpc.studies.campaign.CampaignResult.plot`, from its ``rows()`` and
@@ -30,7 +32,8 @@ def plot_campaign(rows: Sequence[Mapping[str, Any]], summary: Mapping[str, Any])
     )
     ratio_axes.axvline(1.0, color="tab:red", ls="--", label="epsilon")
     ratio_axes.set(
-        xlabel="final error / epsilon  (max ||e|| over the last second)",
+        xlabel="final error / epsilon  (max ||e|| over the last second, or the last quarter "
+        "of a run shorter than 4 s)",
         ylabel="runs",
         title=f"final error, worst {_fmt(summary['worst_final_error_over_epsilon'])} epsilon",
     )
@@ -67,8 +70,9 @@ def plot_campaign(rows: Sequence[Mapping[str, Any]], summary: Mapping[str, Any])
         axes.grid(True, alpha=0.3)
         axes.legend(fontsize="small")
     figure.suptitle(
-        f"Campaign {summary['scenario']}: {summary['runs']} runs "
-        f"({summary['vertex_runs']} vertices, {summary['uniform_runs']} uniform), met "
+        f"Campaign {summary['scenario']}: {count(summary['runs'], 'run')} "
+        f"({count(summary['vertex_runs'], 'vertex', 'vertices')}, "
+        f"{summary['uniform_runs']} uniform), met "
         f"{summary['met']}/{summary['runs']}, seed {summary['seed']}"
     )
     return figure

@@ -35,7 +35,12 @@ def plot_reconfigure(runs: Sequence[ConfigurationRun], *, epsilon: float | None 
             axes.set_ylim(1e-5, 1.0)
         else:
             _error_norm_axes(axes, run.result.t, run.result.error_norm, eps)
-            axes.set_title("met" if run.result.metrics["met"] else "not met", fontsize=10)
+            metrics = run.result.metrics
+            axes.set_title(
+                f"{'met' if metrics['met'] else 'NOT met'}; final max "
+                f"{metrics['final_error'] / eps:.3g} " + r"$\varepsilon$",
+                fontsize=10,
+            )
         if eps is not None:
             axes.axhline(eps, color="tab:red", ls="--", lw=1.0, label=r"$\varepsilon$")
         if i == 0:
@@ -91,8 +96,10 @@ def plot_tool_change(run: ToolChangeRun) -> Figure:
 
 
 def _error_norm_axes(axes: Axes, t: np.ndarray, error_norm: np.ndarray, epsilon: float) -> None:
-    floor = 1e-6  # [rad]; a zero error has no logarithm
-    axes.semilogy(t, np.maximum(error_norm, floor), lw=0.8, color="tab:blue", label=r"$\|e\|$")
-    axes.set_ylim(bottom=max(floor, 0.5 * float(np.min(np.maximum(error_norm[1:], floor)))))
-    axes.set_ylim(top=max(2.0 * epsilon, 1.5 * float(np.max(error_norm))))
+    """``||e||`` on a log axis from its first positive sample (no spike from an exact zero at
+    t = 0), with limits that keep the epsilon line off the frame."""
+    from ...sim.plotting import log_error_limits, positive_for_log
+
+    axes.semilogy(t, positive_for_log(error_norm), lw=0.8, color="tab:blue", label=r"$\|e\|$")
+    axes.set_ylim(*log_error_limits([error_norm], epsilon))
     axes.grid(True, which="both", alpha=0.3)

@@ -113,7 +113,11 @@ def simulate_setup(
         progress=progress,
         plant_backend=scenario.plant,
     )
-    info = {**result.info, "true_parameters": true_parameter_values(setup)}
+    info = {
+        **result.info,
+        "true_parameters": true_parameter_values(setup),
+        "joint_kinds": list(setup.robot.joint_kinds),  # units: rad, N m or m, N per joint
+    }
     return dataclasses.replace(result, info=info)
 
 
