@@ -67,7 +67,7 @@ def test_bound_json_contains_sampled_mismatch(capsys):
     [
         (["bound", "rr_planar", "--q", "0.1", "--qd", "0,0", "--qd-a", "0,0", "--qdd-a", "0,0"], "--q has 1 values"),
         (["bound", "rr_planar", "--q", "nan,0", "--qd", "0,0", "--qd-a", "0,0", "--qdd-a", "0,0"], "finite"),
-        (["bound", "rr_planar", "--q", "0,0", "--qd", "0,0", "--qd-a", "0,0", "--qdd-a", "0,0", "--method", "exact"], "unknown bound method"),
+        (["bound", "rr_planar", "--q", "0,0", "--qd", "0,0", "--qd-a", "0,0", "--qdd-a", "0,0", "--method", "exact"], "--method: invalid choice: 'exact'"),
         (["bound", "rr_planar", "--q", "0,0"], "required"),
         (["check", "no_such_robot"], "unknown robot"),
         (["check", "panda", "--lock", "finger"], "cannot lock unknown joint"),

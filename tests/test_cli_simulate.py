@@ -24,7 +24,7 @@ from urpc.studies.scenario import build, load_scenario, run_scenario, sample_tru
 
 SUMMARY_KEYS = {
     *METRIC_NAMES, "epsilon", "controller", "scenario", "plant", "true_parameters",
-    "certified", "not_certified", "certificate",
+    "certified", "not_certified", "certificate", "final_error_window",
 }  # fmt: skip
 TIMINGS = ("step_time_median", "wall_time")
 
@@ -81,12 +81,13 @@ def test_out_writes_result_files_and_figures(capsys, tmp_path):
     )
     assert code == 0 and err.startswith("warning: NOT certified") and len(err.splitlines()) == 1
     assert "MET" in text and f"saved        {out}" in text
+    # gains.png is new: the adaptive gains over time
     assert sorted(p.name for p in out.iterdir()) == [
-        "certificate.json", "error.png", "result.csv", "result.npz", "scenario.yaml",
-        "summary.json", "torque.png", "trajectory.png",
+        "certificate.json", "error.png", "gains.png", "result.csv", "result.npz",
+        "scenario.yaml", "summary.json", "torque.png", "trajectory.png",
     ]  # fmt: skip
     assert json.loads((out / "certificate.json").read_text())["certified"] is False
-    for name in ("error.png", "torque.png", "trajectory.png"):
+    for name in ("error.png", "gains.png", "torque.png", "trajectory.png"):
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     loaded = SimulationResult.load(out)
     assert loaded.duration == pytest.approx(0.3) and loaded.info["plant"] == "pinocchio"
@@ -173,10 +174,10 @@ def _diverging_scenario(tmp_path: Path) -> Path:
         (["simulate", "no/such/scenario.yaml"], "no such scenario file"),
         (["simulate", "rr_planar/s2_ic1", "--epsilon", "-1"], "field 'epsilon'"),
         (["simulate", "rr_planar/s2_ic1", "--epsilon", "tiny"], "not a finite number"),
-        (["simulate", "rr_planar/s2_ic1", "--controller", "pid"], "valid: computed-torque"),
-        (["simulate", "rr_planar/s2_ic1", "--plant", "bullet"], "valid: mujoco, pinocchio"),
+        (["simulate", "rr_planar/s2_ic1", "--controller", "pid"], "--controller: invalid choice: 'pid'"),
+        (["simulate", "rr_planar/s2_ic1", "--plant", "bullet"], "--plant: invalid choice: 'bullet'"),
         (["simulate", "rr_planar/s1_ic1", "--plant", "mujoco"], "continuous time"),
-        (["simulate", "rr_planar/s2_ic1", "--method", "exact"], "unknown bound method"),
+        (["simulate", "rr_planar/s2_ic1", "--method", "exact"], "--method: invalid choice: 'exact'"),
         (["simulate", "rr_planar/s2_ic1", "--duration", "0"], "must be > 0"),
         (["simulate", "rr_planar/s2_ic1", "--seed", "x"], "invalid int value"),
         (["simulate", "rr_planar/s2_ic1", "--continuous", "--sample-period", "1e-3"], "not allowed"),

@@ -7,16 +7,22 @@ from pathlib import Path
 from ..control import SAMPLED_LAWS
 from .common import (
     EXIT_OK,
+    RESULTS_ROOT,
+    add_output_arguments,
+    count,
     non_negative_float,
     non_negative_int,
+    output_folder,
+    positive_float,
     positive_int,
     print_json,
+    show_progress,
     warn_uncertified,
 )
 
 
 def register(commands) -> None:
-    from ..sim import PLANT_BACKENDS  # not studies.scenario: the argparse set-up stays lean
+    from .simulate import add_plant_argument
 
     p = commands.add_parser(
         "campaign",
@@ -25,24 +31,33 @@ def register(commands) -> None:
         "of the box when 2^n_uncertain <= RUNS, else RUNS/2 random vertices; the rest uniform "
         "draws; physically consistent points only), disturbance seed and initial offset (uniform "
         "within +-IC_SPREAD epsilon per joint), in parallel on local processes or on a Dask "
-        "cluster. Writes OUT/runs.csv (one row per run), OUT/summary.json and "
-        "OUT/histogram.png. The same seed gives the same draws and results, whatever the "
+        "cluster. Writes DIR/runs.csv (one row per run), DIR/summary.json and "
+        "DIR/histogram.png. The same seed gives the same draws and results, whatever the "
         "number of workers.",
     )
-    p.add_argument("scenario", help="scenario file, or a shipped name such as rr_planar/s3_ic1")
-    p.add_argument("--runs", type=positive_int, required=True, help="number of runs")
+    p.add_argument(
+        "scenario",
+        metavar="SCENARIO",
+        help="scenario YAML file or shipped name (rr_planar/s1_ic1 ...)",
+    )
+    p.add_argument("--runs", type=positive_int, required=True, metavar="N", help="number of runs")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=positive_int, help="local worker processes (default: 2)")
+    where.add_argument(
+        "--workers", type=positive_int, metavar="N", help="local worker processes (default: 2)"
+    )
     where.add_argument(
         "--scheduler",
         metavar="ADDRESS",
         help="address of a running Dask scheduler (tcp://host:8786) whose workers have urpc "
         "installed; replaces the local processes",
     )
-    p.add_argument("--seed", type=non_negative_int, default=0, help="campaign seed (default: 0)")
-    p.add_argument("--out", type=Path, help="output folder (default: campaign_<scenario name>)")
-    p.add_argument("--duration", type=float, help="override the scenario's duration [s]")
-    p.add_argument("--plant", choices=PLANT_BACKENDS, help="override the scenario's plant backend")
+    p.add_argument(
+        "--seed", type=non_negative_int, default=0, metavar="N", help="campaign seed (default: 0)"
+    )
+    p.add_argument(
+        "--duration", type=positive_float, metavar="S", help="override the scenario's duration [s]"
+    )
+    add_plant_argument(p, "default: the scenario's")
     p.add_argument(
         "--sampled-law",
         choices=SAMPLED_LAWS,
@@ -53,20 +68,23 @@ def register(commands) -> None:
         "--ic-spread",
         type=non_negative_float,
         default=2.0,
+        metavar="E",
         help="half-width of the random initial offset, in epsilon (default: 2)",
     )
     p.add_argument(
         "--vertex-runs",
         type=non_negative_int,
+        metavar="N",
         help="number of vertex runs (default: every vertex if they fit, else RUNS/2)",
     )
-    p.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    add_output_arguments(
+        p, str(RESULTS_ROOT / "campaign" / "SCENARIO"), what="runs, summary and histogram"
+    )
     p.set_defaults(handler=run_campaign_command)
 
 
 def run_campaign_command(args) -> int:
-    from ..studies.campaign import check_writable, run_campaign
+    from ..studies.campaign import run_campaign
     from ..studies.scenario import load_scenario
 
     law = args.sampled_law
@@ -74,14 +92,14 @@ def run_campaign_command(args) -> int:
     scenario = load_scenario(args.scenario).with_overrides(
         duration=args.duration, plant=args.plant, controller_options=options
     )
-    out = check_writable(args.out or Path(f"campaign_{scenario.name}"))
+    out = output_folder(args.out, default_out(scenario.name))  # before any work
     result = run_campaign(
         scenario,
         args.runs,
         workers=2 if args.workers is None else args.workers,
         scheduler=args.scheduler,
         seed=args.seed,
-        progress=not args.no_progress,
+        progress=show_progress(args),
         ic_spread=args.ic_spread,
         vertex_runs=args.vertex_runs,
     )
@@ -95,12 +113,19 @@ def run_campaign_command(args) -> int:
     return EXIT_OK
 
 
+def default_out(scenario_name: str) -> Path:
+    """``urpc-results/campaign/<scenario name>``."""
+    return RESULTS_ROOT / "campaign" / scenario_name
+
+
 def describe_summary(summary: dict, out: Path) -> list[str]:
     """The text report of a campaign summary, one line per item."""
     lines = [
-        f"campaign {summary['scenario']}: {summary['runs']} runs ({summary['vertex_runs']} "
-        f"vertices of {summary['vertex_total']}, {summary['uniform_runs']} uniform; "
-        f"{summary['rejected_draws']} inconsistent draws rejected), seed {summary['seed']}",
+        f"campaign {summary['scenario']}: {count(summary['runs'], 'run')} "
+        f"({summary['vertex_runs']} of {count(summary['vertex_total'], 'vertex', 'vertices')}, "
+        f"{summary['uniform_runs']} uniform; "
+        f"{count(summary['rejected_draws'], 'inconsistent draw')} rejected), "
+        f"seed {summary['seed']}",
         f"  met epsilon = {summary['epsilon']:g} rad  {summary['met']}/{summary['runs']} "
         f"(met_fraction {summary['met_fraction']:.4g})",
         "  guarantee            "

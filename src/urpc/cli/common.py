@@ -1,4 +1,16 @@
-"""What every CLI command shares: the error contract, argument types, JSON output."""
+"""What every CLI command shares: the error contract, argument types, JSON output, and the
+command-line convention (README, "Command line"):
+
+* the robot is ``ROBOT`` (a URDF path or a name), positional where a command needs nothing else
+  (``check``, ``bound``, also accepted as ``--robot``), ``--robot ROBOT`` where a scenario can
+  stand in for it (``simulate``, ``certify``);
+* files read are ``FILE`` (``--uncertainty/-u FILE``, ``--true-params FILE``), the output folder
+  is ``--out DIR``, checked writable before any work and written all at once, defaulting to
+  ``urpc-results/<job>`` for commands that always write (``simulate`` writes only with ``--out``);
+* options with a fixed set of values list them (``--plant {pinocchio,mujoco}``);
+* ``--json`` prints one JSON object on stdout; ``--no-progress`` turns off the progress bar,
+  which is shown only when stderr is a terminal.
+"""
 
 from __future__ import annotations
 
@@ -10,12 +22,20 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..errors import InputError
+from ..wording import count  # noqa: F401  (re-exported for the commands)
 
 if TYPE_CHECKING:  # numpy is imported when a command needs it (start-up time of the CLI)
     import numpy as np
 
 EXIT_OK = 0
 EXIT_INPUT = 2
+
+#: Root of the default output folders (``urpc-results/<job>``).
+RESULTS_ROOT = Path("urpc-results")
+#: Controllers and bound methods, named here so that the parser lists them without importing the
+#: controllers (``tests/test_cli.py`` checks them against the packages).
+CONTROLLERS = ("interval", "r-alpha", "computed-torque")
+BOUND_METHODS = ("vertex", "hull", "rigorous")
 
 
 class Parser(argparse.ArgumentParser):
@@ -92,24 +112,105 @@ def names(text: str) -> list[str]:
     return [p for p in text.replace(",", " ").split() if p]
 
 
+ROBOT_HELP = "URDF path or robot name (rr_planar, ur5, panda, ...; see 'urpc robots')"
+UNCERTAINTY_HELP = (
+    "uncertainty YAML file (default for a robot with a shipped box: that box; "
+    "'urpc init ROBOT --out FILE' writes one)"
+)
+LOCK_HELP = "comma-separated joints to lock, e.g. panda_finger_joint1,panda_finger_joint2"
+
+
 def add_robot_arguments(parser: argparse.ArgumentParser, uncertainty_required: bool = False):
+    """``ROBOT`` (positional, or ``--robot ROBOT``), ``--uncertainty/-u FILE``, ``--lock``;
+    :func:`robot_argument` reads the robot back."""
+    parser.add_argument("robot", nargs="?", metavar="ROBOT", help=ROBOT_HELP)
     parser.add_argument(
-        "robot", help="URDF path, built-in name (rr_planar) or example-robot-data name (ur5, panda)"
+        "--robot", dest="robot_option", metavar="ROBOT", help="the same as the positional ROBOT"
     )
     parser.add_argument(
         "--uncertainty",
         "-u",
         type=Path,
+        metavar="FILE",
         required=uncertainty_required,
-        help="uncertainty YAML file (default for built-in robots: the robot's uncertainty.yaml)",
+        help=UNCERTAINTY_HELP,
     )
+    parser.add_argument("--lock", type=names, default=[], metavar="JOINTS", help=LOCK_HELP)
+
+
+def robot_argument(args) -> str:
+    """The robot of :func:`add_robot_arguments` (positional or ``--robot``), stored back into
+    ``args.robot``.
+
+    Raises:
+        InputError: neither or two different robots given.
+    """
+    positional, option = args.robot, getattr(args, "robot_option", None)
+    if positional is not None and option is not None and positional != option:
+        raise InputError(
+            f"two robots given: '{positional}' and --robot '{option}'; give one", field="robot"
+        )
+    robot = positional if positional is not None else option
+    if robot is None:
+        raise InputError("give a robot: a URDF path or a name (see 'urpc robots')", field="robot")
+    args.robot = robot
+    return robot
+
+
+def add_output_arguments(
+    parser, default: str | None, *, what: str = "result files and figures", progress: bool = True
+) -> None:
+    """``--out DIR`` (``default``: a folder under :data:`RESULTS_ROOT`, or ``None``: nothing is
+    written without ``--out``), ``--json`` and ``--no-progress``."""
+    where = "nothing is written" if default is None else default
     parser.add_argument(
-        "--lock",
-        type=names,
-        default=[],
-        metavar="JOINTS",
-        help="comma-separated joints to lock, e.g. panda_finger_joint1,panda_finger_joint2",
+        "--out", type=Path, metavar="DIR", help=f"output folder for the {what} (default: {where})"
     )
+    parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    if progress:
+        parser.add_argument(
+            "--no-progress",
+            action="store_true",
+            help="no progress bar (shown only when stderr is a terminal)",
+        )
+
+
+def show_progress(args) -> bool:
+    """The rule of every command: a progress bar on stderr only when stderr is a terminal, and
+    not with ``--no-progress``."""
+    if getattr(args, "no_progress", False):
+        return False
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):  # a replaced or closed stream
+        return False
+
+
+def output_folder(out: Path | None, default: Path) -> Path:
+    """The output folder of a command (``out``, or ``default`` under :data:`RESULTS_ROOT`),
+    checked writable before any work starts (:func:`urpc.sim.results.check_writable`)."""
+    from ..sim.results import check_writable
+
+    return check_writable(default if out is None else out)
+
+
+def write_error(exc: OSError, directory: Path) -> InputError:
+    """An ``OSError`` while writing ``directory`` as an input error that names the folder and the
+    reason, not the staging file's temporary name."""
+    reason = exc.strerror or (str(exc.args[0]) if exc.args else type(exc).__name__)
+    return InputError(f"cannot write the results ({reason})", source=directory)
+
+
+def joint_units(kinds) -> tuple[str, str]:
+    """The units of positions and of generalized forces for joints of ``kinds``
+    (``Robot.joint_kinds``): ``("rad", "N m")`` for revolute joints, ``("m", "N")`` for prismatic
+    ones, both for a mix (the error norm then mixes rad and m)."""
+    prismatic = [kind == "prismatic" for kind in kinds]
+    if all(prismatic) and prismatic:
+        return "m", "N"
+    if any(prismatic):
+        return "rad|m", "N m|N"
+    return "rad", "N m"
 
 
 def one_line(text: str) -> str:

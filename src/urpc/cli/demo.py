@@ -7,14 +7,22 @@ from pathlib import Path
 
 from .common import (
     EXIT_OK,
+    RESULTS_ROOT,
     Parser,
+    add_output_arguments,
     finite_float,
     names,
     non_negative_float,
     non_negative_int,
+    output_folder,
     positive_float,
     print_json,
+    show_progress,
 )
+
+#: Default output folders of the demos.
+RECONFIGURE_OUT = RESULTS_ROOT / "reconfigure"
+TOOL_CHANGE_OUT = RESULTS_ROOT / "tool-change"
 
 
 def register(commands) -> None:
@@ -34,13 +42,7 @@ def register(commands) -> None:
         "loaded and given a controller with the same default settings, then simulated at 1 kHz "
         "on a true plant drawn from its box under a disturbance the controller does not know. "
         "Reports synthesis_time [s] (composition + model load + controller construction), met "
-        "and the metrics; writes OUT/reconfigure.png, OUT/reconfigure.json and OUT/<name>/.",
-    )
-    p.add_argument(
-        "--out",
-        type=Path,
-        default=Path("urpc-results/reconfigure"),
-        help="output folder (default: urpc-results/reconfigure)",
+        "and the metrics; writes DIR/reconfigure.png, DIR/reconfigure.json and DIR/<name>/.",
     )
     p.add_argument(
         "--assemblies",
@@ -50,7 +52,7 @@ def register(commands) -> None:
         help="comma-separated shipped assembly names or assembly files, in order "
         "(default: arm_3dof,arm_4dof,arm_4dof_vacuum)",
     )
-    _common_arguments(p)
+    _common_arguments(p, RECONFIGURE_OUT)
     p.set_defaults(handler=run_reconfigure)
 
     p = demos.add_parser(
@@ -59,35 +61,52 @@ def register(commands) -> None:
         description="Run the 4-DOF gripper arm (arm_4dof, about 1 kg); at --t-change the true "
         "payload becomes about 3 kg (arm_4dof_3kg) and the controller switches to the new box, "
         "keeping its internal state (phi, kappa). Reports the re-entry time into the epsilon "
-        "ball; writes OUT/tool_change.png and OUT/tool_change.json.",
+        "ball; writes DIR/tool_change.png and DIR/tool_change.json.",
     )
     p.add_argument(
-        "--out",
-        type=Path,
-        default=Path("urpc-results/tool-change"),
-        help="output folder (default: urpc-results/tool-change)",
+        "--before",
+        default="arm_4dof",
+        metavar="NAME",
+        help="configuration before (default: arm_4dof)",
     )
-    p.add_argument("--before", default="arm_4dof", help="configuration before (default arm_4dof)")
-    p.add_argument("--after", default="arm_4dof_3kg", help="configuration after (arm_4dof_3kg)")
     p.add_argument(
-        "--t-change", type=positive_float, default=4.0, help="time of the change [s] (default 4)"
+        "--after",
+        default="arm_4dof_3kg",
+        metavar="NAME",
+        help="configuration after (default: arm_4dof_3kg)",
+    )
+    p.add_argument(
+        "--t-change",
+        type=positive_float,
+        default=4.0,
+        metavar="S",
+        help="time of the change [s] (default: 4)",
     )
     p.add_argument(
         "--switch-delay",
         type=non_negative_float,
         default=0.0,
-        help="delay between the change and the controller's switch [s] (default 0)",
+        metavar="S",
+        help="delay between the change and the controller's switch [s] (default: 0)",
     )
-    _common_arguments(p)
+    _common_arguments(p, TOOL_CHANGE_OUT)
     p.set_defaults(handler=run_tool_change)
 
 
-def _common_arguments(p: argparse.ArgumentParser) -> None:
+def _common_arguments(p: argparse.ArgumentParser, out: Path) -> None:
     p.add_argument(
-        "--duration", type=positive_float, default=8.0, help="simulated time [s] (default 8)"
+        "--duration",
+        type=positive_float,
+        default=8.0,
+        metavar="S",
+        help="simulated time [s] (default: 8)",
     )
     p.add_argument(
-        "--seed", type=non_negative_int, default=0, help="seed of plants and disturbances"
+        "--seed",
+        type=non_negative_int,
+        default=0,
+        metavar="N",
+        help="seed of plants and disturbances (default: 0)",
     )
     p.add_argument(
         "--initial-offset",
@@ -96,17 +115,18 @@ def _common_arguments(p: argparse.ArgumentParser) -> None:
         metavar="RAD",
         help="start this far from the reference on every joint [rad] (default: on it)",
     )
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    add_output_arguments(p, str(out), what="figure and results")
 
 
 def run_reconfigure(args) -> int:
     from ..studies.demo import reconfigure_demo
 
+    out = args.out or RECONFIGURE_OUT
+    output_folder(out, RECONFIGURE_OUT)  # checked before any work
     summary = reconfigure_demo(
-        args.out,
+        out,
         configurations=args.assemblies,
-        progress=not args.no_progress,
+        progress=show_progress(args),
         duration=args.duration,
         seed=args.seed,
         initial_offset=args.initial_offset,
@@ -140,9 +160,11 @@ def run_reconfigure(args) -> int:
 def run_tool_change(args) -> int:
     from ..studies.demo import tool_change_demo
 
+    out = args.out or TOOL_CHANGE_OUT
+    output_folder(out, TOOL_CHANGE_OUT)  # checked before any work
     summary = tool_change_demo(
-        args.out,
-        progress=not args.no_progress,
+        out,
+        progress=show_progress(args),
         before=args.before,
         after=args.after,
         t_change=args.t_change,

@@ -8,7 +8,7 @@ import os
 from pathlib import Path
 
 from ..errors import InputError
-from .common import EXIT_OK, names, non_negative_float, print_json
+from .common import EXIT_OK, ROBOT_HELP, count, names, non_negative_float, print_json
 
 DEFAULT_MASS = "10%"
 DEFAULT_COM = 0.01
@@ -28,7 +28,7 @@ def register(commands) -> None:
         epilog="Example: urpc init ur10 --out box.yaml --payload tool0:3 && "
         "urpc simulate --robot ur10 --uncertainty box.yaml",
     )
-    p.add_argument("robot", help="URDF path, built-in name (rr_planar) or example-robot-data name")
+    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
     p.add_argument("--out", "-o", type=Path, required=True, metavar="FILE", help="file to write")
     p.add_argument("--force", action="store_true", help="overwrite FILE if it exists")
     p.add_argument(
@@ -143,8 +143,9 @@ def run_init(args) -> int:
         print_json(summary)
         return EXIT_OK
     print(
-        f"wrote {out}: {box.n_uncertain} uncertain parameters in {len(summary['links'])} "
-        f"links of {robot.name}" + ("" if link is None else f" and a payload at {link}")
+        f"wrote {out}: {count(box.n_uncertain, 'uncertain parameter')} in "
+        f"{count(len(summary['links']), 'link')} of {robot.name}"
+        + ("" if link is None else f" and a payload at {link}")
     )
     for name, width in summary["narrowed_inertia"].items():
         print(

@@ -3,7 +3,16 @@
 from __future__ import annotations
 
 from ..errors import InputError
-from .common import EXIT_OK, add_robot_arguments, print_json, vector
+from .common import (
+    BOUND_METHODS,
+    EXIT_OK,
+    add_robot_arguments,
+    count,
+    joint_units,
+    print_json,
+    robot_argument,
+    vector,
+)
 
 
 def register(commands) -> None:
@@ -35,7 +44,12 @@ def register(commands) -> None:
         ("qdd-a", "reference acceleration qdd_a [rad/s^2]"),
     ):
         p.add_argument(f"--{name}", type=vector, required=True, help=f"{what}, comma-separated")
-    p.add_argument("--method", default=None, help="vertex, hull or rigorous (default: by box kind)")
+    p.add_argument(
+        "--method",
+        choices=BOUND_METHODS,
+        default=None,
+        help="bound method (default: by box kind)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(handler=run_bound)
 
@@ -111,7 +125,7 @@ def load_robot_and_box(args):
     from ..model.robot import load_robot
     from ..model.uncertainty import ParameterBox, load_uncertainty
 
-    robot = load_robot(args.robot, locked_joints=args.lock)
+    robot = load_robot(robot_argument(args), locked_joints=args.lock)
     path = args.uncertainty or default_uncertainty(args.robot)
     if path is None:
         return robot, ParameterBox(links=()), None
@@ -156,7 +170,7 @@ def run_check(args) -> int:
     if args.json:
         print_json(summary)
         return EXIT_OK
-    print(f"robot        {robot.name} ({_count(robot.dof, 'joint')}) from {robot.urdf_path}")
+    print(f"robot        {robot.name} ({count(robot.dof, 'joint')}) from {robot.urdf_path}")
     print(f"joints       {', '.join(robot.joint_names)}")
     print(f"moving links {', '.join(robot.moving_link_names)}")
     if path is None:
@@ -173,8 +187,8 @@ def run_check(args) -> int:
     for payload in box.payloads:
         print(f"payload      '{payload.name}' fixed to link '{payload.link}'")
     print(
-        f"uncertain    {_count(box.n_uncertain, 'parameter')} in "
-        f"{_count(len(box.uncertain_links), 'link')}\n"
+        f"uncertain    {count(box.n_uncertain, 'parameter')} in "
+        f"{count(len(box.uncertain_links), 'link')}\n"
     )
     header = f"  {'field':<8} {'nominal':>12} {'lower':>12} {'upper':>12} {'rel. width':>11}"
     for entry in summary["links"]:
@@ -193,10 +207,6 @@ def run_check(args) -> int:
             print(f"  exact: {', '.join(exact)}")
         print()
     return EXIT_OK
-
-
-def _count(number: int, noun: str) -> str:
-    return f"{number} {noun}" + ("" if number == 1 else "s")
 
 
 def run_bound(args) -> int:
@@ -234,8 +244,10 @@ def run_bound(args) -> int:
             }
         )
         return EXIT_OK
-    print(f"method {method}; mismatch torque w enclosure [N m]")
-    print(f"  {'joint':<24} {'lower':>14} {'upper':>14} {'rho':>14}")
-    for name, lo, hi, r in zip(robot.joint_names, lower, upper, rho, strict=True):
-        print(f"  {name:<24} {lo:>14.6g} {hi:>14.6g} {r:>14.6g}")
+    print(f"method {method}; mismatch torque w enclosure (N m per revolute, N per prismatic joint)")
+    print(f"  {'joint':<24} {'lower':>14} {'upper':>14} {'rho':>14}  unit")
+    rows = zip(robot.joint_names, robot.joint_kinds, lower, upper, rho, strict=True)
+    for name, kind, lo, hi, r in rows:
+        unit = joint_units([kind])[1]
+        print(f"  {name:<24} {lo:>14.6g} {hi:>14.6g} {r:>14.6g}  {unit}")
     return EXIT_OK

@@ -2,12 +2,34 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from ..control import SAMPLED_LAWS
 from ..errors import InputError
-from .common import EXIT_OK, json_text, names, positive_float, print_json, warn_uncertified
+from .common import (
+    BOUND_METHODS,
+    CONTROLLERS,
+    EXIT_OK,
+    LOCK_HELP,
+    RESULTS_ROOT,
+    ROBOT_HELP,
+    UNCERTAINTY_HELP,
+    add_output_arguments,
+    count,
+    joint_units,
+    json_text,
+    names,
+    output_folder,
+    positive_float,
+    positive_int,
+    print_json,
+    show_progress,
+    warn_uncertified,
+    write_error,
+)
+
+#: Default output folder of ``urpc reproduce-paper``.
+PAPER_OUT = RESULTS_ROOT / "paper"
 
 
 def register(commands) -> None:
@@ -20,15 +42,14 @@ def register(commands) -> None:
         "tracks a generic sinusoid inside the joint limits, the true plant is a seeded, "
         "physically consistent draw from the box (printed), epsilon is 1e-2 rad, the control "
         "period 1e-3 s, no disturbance, 10 s.",
-        epilog="Prints whether ||e|| < epsilon was met, the errors, the torque cost and the gains; "
-        "--json prints them as one object; --out DIR saves result.npz, result.csv, summary.json, certificate.json, "
-        "scenario.yaml and the figures (PNG).",
+        epilog="Prints whether ||e|| < epsilon was met, the final error (max ||e|| over the last "
+        "second, or the last quarter of a run shorter than 4 s), the torque cost and the gains; "
+        "--json prints them as one object; --out DIR (checked before the run) saves result.npz, "
+        "result.csv, summary.json, certificate.json, scenario.yaml and the figures "
+        "trajectory.png, error.png, torque.png and gains.png.",
     )
     add_scenario_arguments(p)
-    output = p.add_argument_group("output")
-    output.add_argument("--out", type=Path, metavar="DIR", help="save result files and figures")
-    output.add_argument("--json", action="store_true", help="print one JSON object")
-    output.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    add_output_arguments(p.add_argument_group("output"), None)
     p.set_defaults(handler=run_simulate)
 
     p = commands.add_parser(
@@ -40,23 +61,19 @@ def register(commands) -> None:
         "paper's Figs. 1-5 and each run's result.npz and summary.json.",
     )
     p.add_argument(
-        "--out",
-        type=Path,
-        metavar="DIR",
-        default=None,
-        help="output directory (default: urpc-results/paper)",
-    )
-    p.add_argument(
         "--duration",
         type=positive_float,
         metavar="S",
         help="simulated time of each run [s] (default: the scenario files' 10 s)",
     )
     p.add_argument(
-        "--workers", type=int, default=2, metavar="N", help="parallel processes (default 2)"
+        "--workers",
+        type=positive_int,
+        default=2,
+        metavar="N",
+        help="parallel processes (default: 2)",
     )
-    p.add_argument("--json", action="store_true", help="print one JSON object (results.json)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    add_output_arguments(p, str(PAPER_OUT), what="report, figures and runs")
     p.set_defaults(handler=run_reproduce_paper)
 
 
@@ -66,22 +83,16 @@ def add_scenario_arguments(p, simulate: bool = True) -> None:
     p.add_argument(
         "scenario",
         nargs="?",
+        metavar="SCENARIO",
         help="scenario YAML file or shipped name (rr_planar/s1_ic1 ...); omit with --robot",
     )
     source = p.add_argument_group("robot and knowledge (replace or stand in for a scenario file)")
-    source.add_argument("--robot", help="URDF path or robot name (rr_planar, ur5, panda, ...)")
-    source.add_argument(
-        "--lock", type=names, metavar="JOINTS", help="comma-separated joints to lock (at 0)"
-    )
-    source.add_argument(
-        "--uncertainty",
-        "-u",
-        metavar="FILE",
-        help="uncertainty YAML file (default for a robot known by name: its shipped box)",
-    )
+    source.add_argument("--robot", metavar="ROBOT", help=ROBOT_HELP)
+    source.add_argument("--lock", type=names, metavar="JOINTS", help=LOCK_HELP + " (at 0)")
+    source.add_argument("--uncertainty", "-u", metavar="FILE", help=UNCERTAINTY_HELP)
     run = p.add_argument_group("run settings")
     run.add_argument(
-        "--method", help="bound method of the interval controller: vertex, hull, rigorous"
+        "--method", choices=BOUND_METHODS, help="bound method of the interval controller"
     )
     run.add_argument(
         "--sampled-law",
@@ -108,28 +119,42 @@ def add_scenario_arguments(p, simulate: bool = True) -> None:
         metavar="FILE",
         help="true parameter point file, 'sample' (seeded draw from the box) or 'nominal'",
     )
-    run.add_argument("--controller", help="interval (default), r-alpha or computed-torque")
-    run.add_argument("--plant", help="plant backend: pinocchio (default) or mujoco (sampled runs)")
-    run.add_argument("--seed", type=int, help="seed of the disturbance and of a sampled plant")
+    run.add_argument("--controller", choices=CONTROLLERS, help="controller (default: interval)")
+    add_plant_argument(run, "default: the scenario's, else pinocchio; mujoco for sampled runs")
+    run.add_argument(
+        "--seed", type=int, metavar="N", help="seed of the disturbance and of a sampled plant"
+    )
     run.add_argument(
         "--torque-limit", metavar="TAU", help="torque bound [N m]: one number or one per joint"
     )
 
 
+def add_plant_argument(group, default: str) -> None:
+    """``--plant {pinocchio,mujoco}``, the same in ``simulate`` and ``campaign``."""
+    from ..sim import PLANT_BACKENDS  # not the plants: the argparse set-up stays lean
+
+    group.add_argument("--plant", choices=PLANT_BACKENDS, help=f"true plant backend ({default})")
+
+
 # ============================================================================== simulate
 def run_simulate(args) -> int:
-    from ..sim.plotting import plot_error, plot_torque, plot_trajectory
+    from ..sim.metrics import describe_final_window
+    from ..sim.plotting import plot_error, plot_gains, plot_torque, plot_trajectory
     from ..studies.certification import certificate_fields
     from ..studies.scenario import build, build_controller, simulate_setup
 
+    if args.out is not None:
+        output_folder(args.out, args.out)  # checked before any work
+    out = args.out
     scenario = scenario_from_arguments(args)
     setup = build(scenario)
     controller = build_controller(setup)
     guarantee = certificate_fields(setup, controller)
     warn_uncertified(guarantee)
-    result = simulate_setup(setup, controller, progress=_show_progress(args))
+    result = simulate_setup(setup, controller, progress=show_progress(args))
     summary = {
         **result.summary(),
+        "final_error_window": describe_final_window(result.duration),
         "scenario": scenario.name,
         "plant": result.info["plant"],
         "true_parameters": {
@@ -140,7 +165,7 @@ def run_simulate(args) -> int:
         },
         **guarantee,
     }
-    if args.out is not None:
+    if out is not None:
         import yaml
 
         from ..sim.results import write_files
@@ -154,13 +179,14 @@ def run_simulate(args) -> int:
             "trajectory.png": plot_trajectory(result),
             "error.png": plot_error(result),
             "torque.png": plot_torque(result),
+            "gains.png": plot_gains(result),
         }
         for name, figure in figures.items():
             writers[name] = _savefig(figure)
         try:
-            write_files(args.out, writers)
+            write_files(out, writers)
         except OSError as exc:
-            raise InputError(f"cannot write the results ({exc})", source=args.out) from None
+            raise write_error(exc, out) from None
     if args.json:
         print_json(summary)
         return EXIT_OK
@@ -222,6 +248,8 @@ def scenario_from_arguments(args):
 def _print_summary(result, scenario, setup, summary: dict, out: Path | None) -> None:
     m = result.metrics
     epsilon = result.epsilon
+    # Units follow the joints: rad and N m (revolute), m and N (prismatic), both for a mix.
+    position, force = joint_units(setup.robot.joint_kinds)
     if result.sample_period is None:
         timing = "continuous time"
     else:
@@ -229,13 +257,13 @@ def _print_summary(result, scenario, setup, summary: dict, out: Path | None) -> 
     if result.disturbance_bound > 0:
         known = setup.box.disturbance_bound is not None
         timing += (
-            f", disturbance ||d|| <= {result.disturbance_bound:g} N m "
+            f", disturbance ||d|| <= {result.disturbance_bound:g} {force} "
             f"({'bound known' if known else 'unknown'} to the controller)"
         )
     else:
         timing += ", no disturbance"
     print(
-        f"scenario     {scenario.name}: {setup.robot.name} ({setup.robot.dof} joints), "
+        f"scenario     {scenario.name}: {setup.robot.name} ({count(setup.robot.dof, 'joint')}), "
         f"{result.controller} controller, {summary['plant']} plant"
     )
     print(f"run          {result.duration:g} s, {timing}")
@@ -246,37 +274,40 @@ def _print_summary(result, scenario, setup, summary: dict, out: Path | None) -> 
         covered = "" if setup.inside_box else "; this true plant lies OUTSIDE the box"
         print(
             f"guarantee    certified for the box ({certificate['law']} law; floor "
-            f"{floor:.3g} rad){covered}"
+            f"{floor:.3g} {position}){covered}"
         )
     else:
         print(f"guarantee    {summary['not_certified']}")
     if m["met"]:
         print(
-            f"result       MET: ||e|| < epsilon = {epsilon:g} rad from t = "
+            f"result       MET: ||e|| < epsilon = {epsilon:g} {position} from t = "
             f"{m['entry_time']:.4g} s to the end"
         )
     elif m["entry_time"] is not None:
         print(
-            f"result       NOT MET: ||e|| < epsilon = {epsilon:g} rad only from t = "
+            f"result       NOT MET: ||e|| < epsilon = {epsilon:g} {position} only from t = "
             f"{m['entry_time']:.4g} s, less than the final quarter of the run"
         )
     else:
-        print(f"result       NOT MET: ||e|| ends above epsilon = {epsilon:g} rad")
+        print(f"result       NOT MET: ||e|| ends above epsilon = {epsilon:g} {position}")
     ratio = m["final_error"] / epsilon
     print(
-        f"final error  {m['final_error']:.4g} rad (max over the last second) = "
-        f"{ratio:.3g} x epsilon"
+        f"final error  {m['final_error']:.4g} {position} (max over "
+        f"{summary['final_error_window']}) = {ratio:.4g} x epsilon"
     )
     if m["max_error_after_entry"] is not None:
-        print(f"after entry  max ||e|| = {m['max_error_after_entry']:.4g} rad")
+        print(f"after entry  max ||e|| = {m['max_error_after_entry']:.4g} {position}")
     print(
-        f"torque       peak {m['torque_peak']:.4g} N m, RMS {m['torque_rms']:.4g} N m, "
-        f"variation {m['torque_variation']:.4g} N m/s"
+        f"torque       peak {m['torque_peak']:.4g} {force}, RMS {m['torque_rms']:.4g} {force}, "
+        f"variation {m['torque_variation']:.4g} {force}/s"
     )
     if result.saturated_samples:
-        print(f"saturation   the torque limit clipped {result.saturated_samples} samples")
+        print(f"saturation   the torque limit clipped {count(result.saturated_samples, 'sample')}")
     if m["phi"] is not None:
-        print(f"gains        phi = {m['phi']:.4g} N m s/rad, kappa = {m['kappa']:.4g} s/rad")
+        print(
+            f"gains        phi = {m['phi']:.4g} {force} s/{position}, "
+            f"kappa = {m['kappa']:.4g} s/{position}"
+        )
     print(
         f"time         {m['wall_time']:.3g} s wall, median control step "
         f"{1e6 * m['step_time_median']:.3g} us"
@@ -292,17 +323,14 @@ def _savefig(figure):
     return write
 
 
-def _show_progress(args) -> bool:
-    return not args.no_progress and sys.stderr.isatty()
-
-
 # ============================================================================== reproduce-paper
 def run_reproduce_paper(args) -> int:
-    from ..studies.paper import DEFAULT_OUT_DIR, reproduce_paper, results_markdown
+    from ..studies.paper import reproduce_paper, results_markdown
 
-    out = DEFAULT_OUT_DIR if args.out is None else args.out
+    out = args.out or PAPER_OUT
+    output_folder(out, PAPER_OUT)  # checked before any work
     document = reproduce_paper(
-        out, progress=_show_progress(args), duration=args.duration, workers=args.workers
+        out, progress=show_progress(args), duration=args.duration, workers=args.workers
     )
     if args.json:
         print_json(document)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -12,40 +11,16 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError
-from ...sim.results import write_files
+from ...sim.results import check_writable, write_files
 
 #: File names written by :meth:`CampaignResult.save`.
 RUNS_NAME, SUMMARY_NAME, HISTOGRAM_NAME = "runs.csv", "summary.json", "histogram.png"
 
 
-def check_writable(directory: str | Path) -> Path:
-    """Check, without creating anything, that ``directory`` can be written (it exists as a
-    writable folder, or its nearest existing ancestor is one); returns it as an absolute path.
-
-    Raises:
-        InputError: naming the folder that is in the way.
-    """
-    directory = Path(directory).expanduser().absolute()
-    if directory.exists() and not directory.is_dir():
-        raise InputError(
-            "exists and is not a folder; give a folder for the outputs", source=directory
-        )
-    ancestor = directory.parent
-    while not ancestor.exists():
-        ancestor = ancestor.parent
-    if not ancestor.is_dir() or not os.access(ancestor, os.W_OK | os.X_OK):
-        raise InputError(
-            f"cannot create the output folder: '{ancestor}' is not a writable folder; choose "
-            "another --out",
-            source=directory,
-        )
-    return directory
-
-
 def write_outputs(directory: str | Path, writers: Mapping[str, Callable[[Path], None]]) -> Path:
     """Write the files of ``writers`` (file name -> function writing it at a path) into
     ``directory`` atomically (:func:`urpc.sim.results.write_files`), after
-    :func:`check_writable`.
+    :func:`urpc.sim.results.check_writable`.
 
     Raises:
         InputError: the folder cannot be written (names it).
