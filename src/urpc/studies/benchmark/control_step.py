@@ -141,12 +141,12 @@ def _profile_robot(robot_name: str, repeats: int) -> dict[str, float]:
         paper = copy.copy(controller)  # shares the bound method; only the law differs
         paper.implicit = False
         functions["output_paper_law"] = lambda: paper.output(*args)
-        step, diagonal = 1e3 * controller.sample_period, np.diag_indices(len(q))
+        step, stride = 1e3 * controller.sample_period, len(q) + 1
 
         def inertia():
             # M_L(q) + D T 1 as the law builds it: the raw CRBA (upper triangle), then the shift.
             shifted = pin.crba(lower_robot.model, lower_data, lower_robot.configuration(q))
-            shifted[diagonal] += step
+            shifted.flat[::stride] += step
             return shifted
 
         functions["inertia"] = inertia
