@@ -32,8 +32,8 @@ def plot_campaign(rows: Sequence[Mapping[str, Any]], summary: Mapping[str, Any])
     )
     ratio_axes.axvline(1.0, color="tab:red", ls="--", label="epsilon")
     ratio_axes.set(
-        xlabel="final error / epsilon  (max ||e|| over the last second, or the last quarter "
-        "of a run shorter than 4 s)",
+        xlabel="final error / epsilon\n(max ||e|| over the last second; the last quarter of a "
+        "run < 4 s)",
         ylabel="runs",
         title=f"final error, worst {_fmt(summary['worst_final_error_over_epsilon'])} epsilon",
     )
@@ -50,7 +50,7 @@ def plot_campaign(rows: Sequence[Mapping[str, Any]], summary: Mapping[str, Any])
     )
     entry_axes.axvline(deadline, color="tab:red", ls="--", label="deadline 0.75 T")
     entry_axes.set(
-        xlabel="entry time [s]  (last entry into ||e|| < epsilon)",
+        xlabel="entry time [s]\n(last entry into ||e|| < epsilon)",
         ylabel="runs",
         title=f"entry time, worst {_fmt(summary['worst_entry_time'])} s",
     )
