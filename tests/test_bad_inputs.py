@@ -220,3 +220,133 @@ def test_bound_rejects_wrong_shapes_in_the_api(method):
         bound.enclose(np.zeros(3), np.zeros(2), np.zeros(2), np.zeros(2))
     with pytest.raises(InputError, match="qdd_a has shape"):
         bound.rho(np.zeros(2), np.zeros(2), np.zeros(2), np.zeros((2, 2)))
+
+
+# ------------------------------------------------------------------ API mistakes (issue 10.6)
+# Mistakes that only the Python API can make: each raises an InputError naming the argument and
+# what is expected (not a raw AttributeError, TypeError or NotADirectoryError).
+_API: dict = {}
+
+
+def _rr():
+    """The RR arm, its shipped box and a controller synthesized at 1 kHz (built once)."""
+    if not _API:
+        robot = urpc.load_robot("rr_planar")
+        box = urpc.load_uncertainty("rr_planar", robot)
+        controller = urpc.synthesize(robot, box, epsilon=1e-2, sample_period=1e-3)
+        _API.update(robot=robot, box=box, controller=controller)
+    return _API["robot"], _API["box"], _API["controller"]
+
+
+def _simulate(**changes):
+    robot, box, controller = _rr()
+    arguments = dict(
+        plant=robot, controller=controller, trajectory=urpc.PaperTrajectory(), duration=0.01,
+        sample_period=1e-3,
+    )  # fmt: skip
+    arguments.update(changes)
+    return urpc.simulate(**arguments)
+
+
+def _save_into_a_file(tmp: Path):
+    result = _simulate()
+    (tmp / "existing").write_text("a file")
+    return result.save(tmp / "existing")
+
+
+def _paper_trajectory_on_ur5(tmp: Path):
+    ur5 = urpc.load_robot("ur5")
+    box = urpc.parse_uncertainty({"links": {"wrist_3_link": {"mass": "10%"}}}, ur5)
+    controller = urpc.synthesize(ur5, box, epsilon=1e-2)
+    return urpc.simulate(ur5, controller, urpc.PaperTrajectory(), duration=0.01, sample_period=1e-3)
+
+
+def _controller_output_with_lists(tmp: Path):
+    from urpc.control.base import Reference
+
+    _, _, controller = _rr()
+    torque = controller.output(
+        0.0, [0.1, 0], [0, 0], Reference([0, 0], [0, 0], [0, 0]), controller.initial_state()
+    )
+    assert np.all(np.isfinite(torque))
+    raise InputError("accepted: lists are array-likes")  # the case expects no TypeError
+
+
+API_CASES: dict[str, tuple[Callable[[Path], object], tuple[str, ...]]] = {
+    "synthesize_box_path": (lambda tmp: urpc.synthesize(_rr()[0], "box.yaml", epsilon=1e-2), ("field 'box'", "ParameterBox", "urpc.load_uncertainty('box.yaml', robot)")),
+    "synthesize_box_path_with_method": (lambda tmp: urpc.synthesize(_rr()[0], "box.yaml", epsilon=1e-2, method="hull"), ("field 'box'", "got str")),
+    "make_bound_box_path": (lambda tmp: urpc.make_bound("vertex", _rr()[0], Path("box.yaml")), ("field 'box'", "got PosixPath")),
+    "make_bound_robot_name": (lambda tmp: urpc.make_bound("vertex", "rr_planar", _rr()[1]), ("field 'robot'", "urpc.load_robot")),
+    "simulate_box_as_controller": (lambda tmp: _simulate(controller=_rr()[1]), ("field 'controller'", "urpc.synthesize", "got ParameterBox")),
+    "simulate_box_as_plant": (lambda tmp: _simulate(plant=_rr()[1]), ("field 'plant'", "got ParameterBox")),
+    "simulate_trajectory_is_a_list": (lambda tmp: _simulate(trajectory=[0, 0]), ("field 'trajectory'", "reference(t)", "got list")),
+    "simulate_epsilon_text": (lambda tmp: _simulate(epsilon="0.01"), ("field 'epsilon'", "'0.01' is a str, not a number")),
+    "simulate_duration_text": (lambda tmp: _simulate(duration="1"), ("field 'duration'", "not a number")),
+    "simulate_paper_trajectory_on_ur5": (_paper_trajectory_on_ur5, ("field 'trajectory'", "PaperTrajectory(amplitude=", "has 2 joints", "'ur5' has 6")),
+    "load_uncertainty_dict": (lambda tmp: urpc.load_uncertainty({"links": {}}, _rr()[0]), ("field 'path'", "got dict", "urpc.parse_uncertainty(document, robot)")),
+    "load_uncertainty_robot_name": (lambda tmp: urpc.load_uncertainty("rr_planar", "rr_planar"), ("field 'robot'", "urpc.load_robot")),
+    "load_parameter_point_box_path": (lambda tmp: urpc.load_parameter_point("rr_planar", _rr()[0], "box.yaml"), ("field 'box'", "ParameterBox")),
+    "save_into_an_existing_file": (_save_into_a_file, ("existing", "not a folder")),
+    "save_under_an_existing_file": (lambda tmp: (tmp / "f").write_text("x") and _simulate().save(tmp / "f" / "run"), ("'", "not a writable folder")),
+}  # fmt: skip
+
+#: Cases in code this change does not own (src/urpc/control/*): expected to fail until fixed there.
+API_CASES_PENDING = {
+    "synthesize_epsilon_text": (lambda tmp: urpc.synthesize(_rr()[0], _rr()[1], epsilon="0.01"), ("field 'epsilon'", "not a number")),
+    "controller_output_with_lists": (_controller_output_with_lists, ("accepted",)),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", sorted(API_CASES))
+def test_api_mistakes_raise_input_errors_naming_the_argument(name, tmp_path):
+    call, words = API_CASES[name]
+    with pytest.raises(InputError) as info:
+        call(tmp_path)
+    for word in words:
+        assert word in str(info.value), f"{word!r} not in {str(info.value)!r}"
+
+
+@pytest.mark.parametrize("name", sorted(API_CASES_PENDING))
+def test_api_mistakes_in_the_controller(name, tmp_path):
+    call, words = API_CASES_PENDING[name]
+    try:
+        call(tmp_path)
+    except InputError as exc:
+        assert all(word in str(exc) for word in words)
+    except Exception as exc:  # noqa: BLE001
+        pytest.xfail(f"src/urpc/control/* still raises {type(exc).__name__}: {exc}")
+    else:
+        pytest.xfail("src/urpc/control/* still accepts it")
+
+
+def test_array_likes_are_accepted_where_arrays_are_expected():
+    robot, box, controller = _rr()
+    for method in sorted(urpc.BOUND_METHODS):
+        bound = urpc.make_bound(method, robot, box)
+        state = ([0.1, 0.2], [1, -1], (1.0, 1.0), [2, 2])
+        lower, upper = bound.enclose(*state)
+        expected = bound.enclose(*(np.array(v, dtype=float) for v in state))
+        np.testing.assert_array_equal(lower, expected[0])
+        np.testing.assert_array_equal(upper, expected[1])
+        np.testing.assert_array_equal(bound.rho(*state), bound.rho(*map(np.asarray, state)))
+        with pytest.raises(InputError, match="qd"):
+            bound.enclose([0.1, 0.2], [1], [1, 1], [2, 2])
+    result = _simulate(q0=[0, 0], qd0=(0, 0), torque_limit=[100, 100])
+    assert np.all(np.isfinite(result.q))
+
+
+def test_simulating_at_another_period_than_the_synthesis_one_warns():
+    from urpc.sim.simulation import SamplePeriodWarning
+
+    with pytest.warns(SamplePeriodWarning, match="synthesized for a sample period of 0.001 s"):
+        _simulate(sample_period=2e-3)
+    with pytest.warns(SamplePeriodWarning, match="in continuous time"):
+        _simulate(sample_period=None)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SamplePeriodWarning)
+        _simulate(sample_period=1e-3)
+        robot, box, _ = _rr()
+        continuous = urpc.synthesize(robot, box, epsilon=1e-2)  # no period: no warning
+        _simulate(controller=continuous, sample_period=2e-3)

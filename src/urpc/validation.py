@@ -31,8 +31,14 @@ def positive_number(field: str, value: Any, expected: str) -> float:
     (e.g. ``"a finite number > 0 [s]"``).
 
     Raises:
-        InputError: not a number, or out of range (``field`` named).
+        InputError: not a number (a text such as ``"0.01"`` is not one in the API), or out of
+            range (``field`` named).
     """
+    if isinstance(value, str | bytes | bool):
+        raise InputError(
+            f"{value!r} is a {type(value).__name__}, not a number; expected {expected}",
+            field=field,
+        )
     try:
         number = float(value)
     except (TypeError, ValueError):

@@ -8,7 +8,7 @@ from __future__ import annotations
 from ..errors import InputError
 from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
-from .base import BoundMethod
+from .base import BoundMethod, check_box
 from .hull import HullBound
 from .rigorous import RigorousBound
 from .vertex import VertexBound
@@ -36,7 +36,12 @@ def make_bound(name: str, robot: Robot, box: ParameterBox) -> BoundMethod:
 
 
 def default_method(box: ParameterBox) -> str:
-    """The designed default: ``vertex`` when a link box is physical, else ``hull`` (exact)."""
+    """The designed default: ``vertex`` when a link box is physical, else ``hull`` (exact).
+
+    Raises:
+        InputError: ``box`` is not a :class:`~urpc.model.uncertainty.ParameterBox`.
+    """
+    check_box(box)
     if any(b.kind == "physical" for b in box.uncertain_links) and "vertex" in METHODS:
         return "vertex"
     return "hull"

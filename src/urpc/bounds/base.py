@@ -13,10 +13,12 @@ point of the box (and every ``||d|| <= beta_d`` when the disturbance bound is kn
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from pathlib import Path
 from typing import ClassVar
 
 import numpy as np
 
+from ..errors import InputError
 from ..model.regressor import placement_matrix
 from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
@@ -53,6 +55,7 @@ class BoundMethod(ABC):
     uses_regressor: ClassVar[bool] = True
 
     def __init__(self, robot: Robot, box: ParameterBox):
+        check_robot_and_box(robot, box)
         self.robot = box.nominal_robot(robot)
         self.box = box
         self.disturbance_bound = box.disturbance_bound
@@ -102,6 +105,35 @@ class BoundMethod(ABC):
             lower = lower - self.disturbance_bound
             upper = upper + self.disturbance_bound
         return lower, upper
+
+
+def check_robot_and_box(robot: object, box: object) -> None:
+    """Typed errors for a robot or a box of the wrong type (a file name given for a box).
+
+    Raises:
+        InputError: naming the argument and what is expected.
+    """
+    if not isinstance(robot, Robot):
+        raise InputError(
+            f"expected a Robot (urpc.load_robot(...)), got {type(robot).__name__} {robot!r:.60}",
+            field="robot",
+        )
+    check_box(box)
+
+
+def check_box(box: object) -> None:
+    """An :class:`~urpc.errors.InputError` naming ``box`` unless it is a :class:`ParameterBox`."""
+    if not isinstance(box, ParameterBox):
+        hint = (
+            f"; load it first: urpc.load_uncertainty({str(box)!r}, robot)"
+            if isinstance(box, str | Path)
+            else ""
+        )
+        raise InputError(
+            f"expected a ParameterBox (urpc.load_uncertainty(path, robot)), got "
+            f"{type(box).__name__} {box!r:.60}{hint}",
+            field="box",
+        )
 
 
 def link_body_placement(robot: Robot, link: str) -> tuple[int, np.ndarray]:

@@ -184,8 +184,11 @@ class SlotineLiRegressor:
         """
         try:  # the fast path of state_envelope, inlined (this is the control step's hot path)
             envelope = rounding_envelope(q, qd, qd_a, qdd_a, self._constants)
-        except TypeError:
-            envelope = math.nan
+        except TypeError:  # lists or strided arrays: checked, then converted (slow path)
+            envelope = self.state_envelope(q, qd, qd_a, qdd_a)
+            q, qd, qd_a, qdd_a = (
+                np.ascontiguousarray(v, dtype=float) for v in (q, qd, qd_a, qdd_a)
+            )
         if envelope <= self.ENVELOPE_LIMIT:
             self.envelope = envelope
             if envelope > self.largest_envelope:

@@ -322,6 +322,13 @@ def load_parameter_point(
     (in the kind of that link's box, physical for links without a box), for
     :meth:`ParameterBox.plant`.
     """
+    _check_arguments(path, robot, "load_parameter_point", None)
+    if not isinstance(box, ParameterBox):
+        raise InputError(
+            f"expected a ParameterBox (urpc.load_uncertainty(path, robot)), got "
+            f"{type(box).__name__}",
+            field="box",
+        )
     path = shipped_file(path, "true_parameters.yaml", "parameter point")
     source = str(path)
     spec = validate(ParameterPointFile, read_yaml(path), source)

@@ -282,7 +282,17 @@ def write_files(directory: str | Path, writers: Mapping[str, Callable[[Path], No
 
     Returns:
         The directory.
+
+    Raises:
+        InputError: ``directory`` is not a path, is a file, or cannot be created (a file in the
+            way, a read-only folder) (:func:`check_writable`).
     """
+    if not isinstance(directory, str | Path):
+        raise InputError(
+            f"expected a directory path (str or Path), got {type(directory).__name__}",
+            field="directory",
+        )
+    check_writable(directory)  # a file in the way is an InputError, not NotADirectoryError
     directory = Path(directory)
     existing = directory.is_dir()
     if existing:

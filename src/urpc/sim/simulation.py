@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -41,6 +42,7 @@ from .plants import PLANTS, make_plant
 from .progress import SimulationProgress
 from .results import SimulationResult
 from .sampled import DISTURBANCES, run_sampled
+from .trajectories import PaperTrajectory
 
 
 def simulate(
@@ -111,6 +113,7 @@ def simulate(
         SimulationError: the run diverged or the integrator failed (names the time and state).
     """
     start = time.perf_counter()
+    _check_parts(plant, controller, trajectory)
     n = plant.dof
     reference0 = trajectory.reference(0.0)
     q0 = finite_vector("q0", reference0.q if q0 is None else q0, n)
@@ -178,9 +181,11 @@ def simulate(
                     field="disturbance_bound",
                 )
             rate = positive_number("output_rate", output_rate, "a finite number > 0 [Hz]")
+            _check_period(controller, None)
             series, info = run_continuous(setup, method, rtol, atol, rate)
         else:
             period = positive_number("sample_period", sample_period, "a finite number > 0 [s]")
+            _check_period(controller, period)
             if period > duration:
                 raise InputError(
                     f"{period!r} s is longer than the duration {duration!r} s",
@@ -201,6 +206,71 @@ def simulate(
         sample_period=None if sample_period is None else float(sample_period),
         wall_time=time.perf_counter() - start,
         info=info,
+    )
+
+
+class SamplePeriodWarning(UserWarning):
+    """A controller simulated at another period than the one it was synthesized for."""
+
+
+def _check_parts(plant: Any, controller: Any, trajectory: Any) -> None:
+    """Typed errors naming the argument when a plant, controller or trajectory is of the wrong
+    type or size (a box given as the controller, a 2-joint trajectory for a 6-joint arm)."""
+    if not isinstance(plant, Robot):
+        raise InputError(
+            f"expected a Robot (urpc.load_robot(...) or box.plant(robot, point)), got "
+            f"{type(plant).__name__}",
+            field="plant",
+        )
+    if not isinstance(controller, Controller):
+        raise InputError(
+            "expected a controller (urpc.synthesize(robot, box, epsilon=...) or another "
+            f"urpc.control.Controller), got {type(controller).__name__}",
+            field="controller",
+        )
+    if not callable(getattr(trajectory, "reference", None)):
+        raise InputError(
+            "expected a trajectory with reference(t) (urpc.sim.trajectories: PaperTrajectory, "
+            f"SinusoidTrajectory, QuinticTrajectory, generic_trajectory), got "
+            f"{type(trajectory).__name__}",
+            field="trajectory",
+        )
+    dof = getattr(trajectory, "dof", plant.dof)
+    if dof != plant.dof:
+        hint = (
+            f"; PaperTrajectory is the paper's 2-joint reference: give its amplitude per joint "
+            f"(PaperTrajectory(amplitude=[...] with {plant.dof} values)) or use "
+            "generic_trajectory(robot)"
+            if isinstance(trajectory, PaperTrajectory)
+            else ""
+        )
+        raise InputError(
+            f"{trajectory!r} has {dof} joints, the plant {plant.name!r} has {plant.dof}{hint}",
+            field="trajectory",
+        )
+    controlled = getattr(getattr(controller, "robot", None), "dof", plant.dof)
+    if controlled != plant.dof:
+        raise InputError(
+            f"controller {controller.name!r} was built for {controlled} joints, the plant "
+            f"{plant.name!r} has {plant.dof}",
+            field="controller",
+        )
+
+
+def _check_period(controller: Controller, period: float | None) -> None:
+    """A :class:`SamplePeriodWarning` when ``controller`` was synthesized for a period
+    (``controller.sample_period`` [s]) and runs at another one (``None``: continuous time)."""
+    synthesized = getattr(controller, "sample_period", None)
+    if synthesized is None or (period is not None and math.isclose(period, synthesized)):
+        return
+    running = "in continuous time" if period is None else f"at {period:g} s"
+    warnings.warn(
+        SamplePeriodWarning(
+            f"controller {controller.name!r} was synthesized for a sample period of "
+            f"{synthesized:g} s and is simulated {running}: its sampled law and any certificate "
+            f"hold at {synthesized:g} s only; synthesize it with sample_period={period!r}"
+        ),
+        stacklevel=3,
     )
 
 
