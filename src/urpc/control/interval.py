@@ -45,6 +45,7 @@ Build it with :func:`urpc.control.synthesis.synthesize`, which validates the gai
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -156,6 +157,12 @@ class IntervalPassivityController(Controller):
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
     ) -> np.ndarray:
         """Joint torque ``u`` [N m] of eq. (4) with (10), or the implicit sampled law."""
+        if not (type(q) is type(qd) is type(reference.q) is np.ndarray):
+            # Array-likes (lists) from a caller: convert once, off the simulator's path.
+            q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+            reference = Reference(
+                *(np.asarray(x, dtype=float) for x in dataclasses.astuple(reference))
+            )
         Kr = self.Kr
         e = reference.q - q
         ed = reference.qd - qd

@@ -98,7 +98,7 @@ def synthesize(
 
 
 def _number(field: str, value, expected: str, valid) -> float:
-    if isinstance(value, bool):
+    if isinstance(value, bool | str | bytes):  # float("0.01") would parse text
         raise InputError(f"{value!r} is not a number; expected {expected}", field=field)
     try:
         number = float(value)
