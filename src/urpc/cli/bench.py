@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from ..errors import InputError
-from .common import EXIT_OK, Parser, names, positive_int, print_json
+from .common import EXIT_OK, Parser, names, positive_int, print_json, show_progress
 
 
 def register(commands) -> None:
@@ -107,6 +107,6 @@ def run_bench_bounds(args) -> int:
 
 
 def _progress(args):
-    if args.no_progress or not sys.stderr.isatty():
+    if not show_progress(args):  # the CLI's rule: only on a terminal
         return None
     return lambda message: print(f"bench: {message} ...", file=sys.stderr, flush=True)
