@@ -186,9 +186,12 @@ def shipped_file(source: str | Path, default: str, what: str = "file") -> Path:
 
 
 def uncertainty_schema() -> Path | None:
-    """The JSON Schema of uncertainty files (``docs/schemas/uncertainty.schema.json`` of the source
-    tree, for editors), or ``None`` when urpc runs from an installation without the docs."""
-    path = builtin_root().parent / "docs" / "schemas" / "uncertainty.schema.json"
+    """The JSON Schema of uncertainty files, for editors: ``docs/schemas/uncertainty.schema.json``,
+    installed with the package as ``urpc._schemas`` (``None`` if it is missing)."""
+    try:
+        path = Path(str(importlib.resources.files("urpc._schemas"))) / "uncertainty.schema.json"
+    except ModuleNotFoundError:
+        return None
     return path if path.is_file() else None
 
 
