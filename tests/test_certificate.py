@@ -116,3 +116,29 @@ def test_the_floor_bounds_sampled_ur5_plants_once_the_gains_saturate(ur5):
             seed=k, controller_state0=saturated,
         )  # fmt: skip
         assert _final_error(result, 1.0) <= certificate.epsilon_floor, (k, certificate.summary())
+
+
+SLIDER = """<robot name="slider"><link name="base"/>
+<link name="cart"><inertial><origin xyz="0 0 0"/><mass value="2.0"/>
+<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+<joint name="x" type="prismatic"><parent link="base"/><child link="cart"/><axis xyz="1 0 0"/>
+<limit lower="-1" upper="1" effort="100" velocity="2"/></joint></robot>"""
+
+
+def test_a_one_joint_robot_is_certified_and_runs(tmp_path):
+    """One joint: Pinocchio hands back the regressor's single row as a vector."""
+    from urpc.sim.trajectories import generic_trajectory
+
+    (tmp_path / "slider.urdf").write_text(SLIDER)
+    robot = urpc.load_robot(tmp_path / "slider.urdf")
+    box = urpc.parse_uncertainty({"links": {"cart": {"mass": "20%"}}}, robot)
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
+    assert controller.bound.regressor(*np.zeros((4, 1))).shape == (1, 10)
+    trajectory = generic_trajectory(robot)
+    certificate = certify(controller, trajectory, duration=2.0, disturbance_bound=1.0)
+    assert certificate.certified, certificate.summary()
+    result = urpc.simulate(
+        box.plant(robot, box.vertex(1)), controller, trajectory, duration=2.0,
+        q0=trajectory.reference(0.0).q, sample_period=1e-3, disturbance_bound=1.0,
+    )  # fmt: skip
+    assert result.metrics["met"]

@@ -273,8 +273,8 @@ def _print_summary(result, scenario, setup, summary: dict, out: Path | None) -> 
         floor = certificate["epsilon_floor"]
         covered = "" if setup.inside_box else "; this true plant lies OUTSIDE the box"
         print(
-            f"guarantee    certified for the box ({certificate['law']} law; floor "
-            f"{floor:.3g} {position}){covered}"
+            f"guarantee    certified for the box: ||e|| ends below epsilon ({certificate['law']} "
+            f"law; {floor:.3g} {position} once the gains reach their ceiling){covered}"
         )
     else:
         print(f"guarantee    {summary['not_certified']}")

@@ -210,6 +210,8 @@ class SlotineLiRegressor:
             ) from None
         # Pinocchio hands back a fresh copy, which can take the difference in place.
         result = np.subtract(with_gravity, free, out=with_gravity if out is None else out)
+        if result.ndim == 1:  # Pinocchio returns a one-row matrix as a vector (one joint)
+            result = result.reshape(1, -1)
         self._last_scaled = result
         return result
 
