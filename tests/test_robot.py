@@ -165,6 +165,10 @@ def test_a_mimic_joint_in_a_urdf_file_names_file_and_joint(tmp_path):
     path = _write(tmp_path, _urdf(extra=second))
     with pytest.raises(InputError, match=r"robot\.urdf: field 'joint\.j2\.mimic'.*'j2' mimics"):
         load_robot(path)
+    # A fixed joint never moves: its mimic element has no effect (talos's grippers carry some).
+    fixed = second.replace('type="revolute"', 'type="fixed"')
+    assert load_robot(_write(tmp_path, _urdf(extra=fixed), "fixed_mimic.urdf")).dof == 1
+    assert load_robot("talos_left_arm").dof == 7
 
 
 def test_a_closed_kinematic_loop_is_reported_as_such(tmp_path):

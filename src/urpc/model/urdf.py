@@ -117,13 +117,14 @@ def check_tree(root, path: Path) -> None:
 
 
 def mimic_joints(path: Path) -> dict[str, str]:
-    """``{follower: leader}`` for every joint with a ``<mimic joint=...>`` element."""
+    """``{follower: leader}`` for every moving joint with a ``<mimic joint=...>`` element (a fixed
+    joint never moves, so its mimic element has no effect: talos's gripper carries such ones)."""
     import xml.etree.ElementTree as ElementTree
 
     mimics = {}
     for joint in ElementTree.parse(path).getroot().findall("joint"):
         mimic = joint.find("mimic")
-        if mimic is not None:
+        if mimic is not None and joint.get("type") != "fixed":
             mimics[joint.get("name")] = mimic.get("joint")
     return mimics
 
