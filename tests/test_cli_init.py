@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import urllib.parse
 from pathlib import Path
 
 import pytest
@@ -51,9 +52,16 @@ def test_init_file_is_commented_and_names_the_schema(capsys, tmp_path):
     assert _run(capsys, "init", "ur10", "--out", box)[0] == 0
     text = box.read_text()
     first = text.splitlines()[0]
-    if SCHEMA.is_file():
-        assert first.startswith("# yaml-language-server: $schema=")
-        assert first.endswith("docs/schemas/uncertainty.schema.json")
+    # The editor line names the schema: a relative path inside the source tree, else (a plain
+    # install) the installed copy as a file URI; either way the published schema itself.
+    assert first.startswith("# yaml-language-server: $schema=")
+    reference = first.split("$schema=", 1)[1]
+    named = (
+        Path(urllib.parse.urlparse(reference).path)
+        if "://" in reference
+        else box.parent / reference
+    )
+    assert named.read_text() == SCHEMA.read_text()
     assert "# URDF 7.778 kg -> [7.0002, 8.5558]" in text  # shoulder_link mass, +-10 %
     document = yaml.safe_load(text)
     assert document["robot"] == "ur10" and document["disturbance"] == "unknown"
