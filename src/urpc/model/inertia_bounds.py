@@ -67,9 +67,8 @@ class InertiaBounds:
         self.box = box
         if scale is None:
             samples = sample_configurations(self.robot, 12, seed=0)
-            scale = max(_SCALES, key=lambda s: self._build(s).min_beta(samples))
-        built = self._build(scale)
-        self.lower_robot, self.upper_robot = built.lower_robot, built.upper_robot
+            scale = max(_SCALES, key=lambda s: _min_beta(*self._copies(s), samples))
+        self.lower_robot, self.upper_robot = self._copies(scale)
         self.scale = float(scale)
         configurations = sample_configurations(self.robot, 64, seed=1)
         #: ``max lambda_max(M_U(q))`` [kg m^2] over 64 configurations within the joint limits.
@@ -77,15 +76,12 @@ class InertiaBounds:
             float(np.linalg.eigvalsh(self.upper(q))[-1]) for q in configurations
         )
 
-    def _build(self, scale: float) -> InertiaBounds:
-        bounds = object.__new__(InertiaBounds)
+    def _copies(self, scale: float) -> tuple[Robot, Robot]:
+        """The model copies whose links carry the lower and the upper spatial bounds."""
         lower, upper = {}, {}
         for link_box in self.box.uncertain_links:
             lower[link_box.link], upper[link_box.link] = spatial_bounds(link_box, scale)
-        bounds.robot, bounds.box, bounds.scale = self.robot, self.box, scale
-        bounds.lower_robot = self.robot.with_link_inertias(lower)
-        bounds.upper_robot = self.robot.with_link_inertias(upper)
-        return bounds
+        return self.robot.with_link_inertias(lower), self.robot.with_link_inertias(upper)
 
     def lower(self, q: np.ndarray) -> np.ndarray:
         """``M_L(q)`` [kg m^2]: ``M(q, pi) - M_L(q)`` is positive semi-definite on the box."""
@@ -97,10 +93,15 @@ class InertiaBounds:
 
     def beta(self, q: np.ndarray) -> float:
         """``lambda_min(M_U^{-1/2} M_L M_U^{-1/2})`` at ``q``: ``M_L >= beta M`` on the box."""
-        return float(scipy.linalg.eigh(self.lower(q), self.upper(q), eigvals_only=True)[0])
+        return _beta(self.lower_robot, self.upper_robot, q)
 
-    def min_beta(self, configurations: np.ndarray) -> float:
-        return min(self.beta(q) for q in configurations)
+
+def _beta(lower: Robot, upper: Robot, q: np.ndarray) -> float:
+    return float(scipy.linalg.eigh(lower.M(q), upper.M(q), eigvals_only=True)[0])
+
+
+def _min_beta(lower: Robot, upper: Robot, configurations: np.ndarray) -> float:
+    return min(_beta(lower, upper, q) for q in configurations)
 
 
 def spatial_bounds(box: LinkBox, scale: float) -> tuple[pin.Inertia, pin.Inertia]:
