@@ -76,6 +76,8 @@ def test_continuous_time_theorem_2_is_certified_for_any_epsilon(rr, rr_box):
     controller = urpc.synthesize(rr, rr_box, 1e-3)
     certificate = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
     assert certificate.certified and certificate.epsilon_floor == 0.0
+    # Theorem 2 needs no disturbance bound in continuous time.
+    assert certify(controller, PaperTrajectory(), duration=4.0).certified
     names = {c.name for c in certificate.conditions}
     assert {"Theorem 2: kappa_I > 0", "Theorem 2: phi_I > 0"} <= names
 

@@ -114,15 +114,15 @@ def certify(
     conditions = _theorem_conditions(controller)
     law = "continuous" if controller.sample_period is None else controller.sampled_law
     grid = FloorGrid(controller, trajectory, duration)
-    if d is None:
+    if d is None and law == "implicit":  # Theorem 2 needs no bound in continuous time
         conditions.append(
             Condition(
                 "disturbance bound given", False, math.nan, math.nan,
                 "the sampled-data floor needs ||d||: give the scenario's `disturbance` or "
-                "--disturbance-bound",
+                "--disturbance D",
             )
         )  # fmt: skip
-        d = math.nan
+    d = math.nan if d is None else d
     figures = grid.figures()
     max_period = grid.max_sample_period(controller.epsilon, d) if math.isfinite(d) else 0.0
     if controller.sample_period is None:
