@@ -171,7 +171,7 @@ def run_simulate(args) -> int:
         from ..sim.results import write_files
 
         writers = result.writers(csv=True)
-        guarantee_text = json_text({key: summary[key] for key in guarantee})
+        guarantee_text = json_text(guarantee)
         writers["certificate.json"] = lambda path: path.write_text(guarantee_text)
         document = yaml.safe_dump(scenario.to_dict(), sort_keys=False)
         writers["scenario.yaml"] = lambda path: path.write_text(document)

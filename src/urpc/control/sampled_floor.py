@@ -173,8 +173,8 @@ class _Piece:
         self.grid = grid
         bounds = InertiaBounds(grid.controller.robot, box)
         count = len(grid.q)
-        self.lam_L, self.lam_U, self.beta, self.nu, self.gamma, self.drift = (
-            np.full(count, math.inf) for _ in range(6)
+        self.lam_L, self.lam_U, self.beta, self.nu, self.gamma = (
+            np.full(count, math.inf) for _ in range(5)
         )
         #: ``U^T M_L_law^-1`` with ``M_U = U U^T``: ``||M^{1/2} M_L^-1 x|| <= ||U^T M_L^-1 x||``.
         self.to_metric: list[np.ndarray | None] = []
@@ -197,7 +197,7 @@ class _Piece:
                 1.0 - scipy.linalg.eigh(M0, MU, eigvals_only=True)[0],
                 scipy.linalg.eigh(M0, ML, eigvals_only=True)[-1] - 1.0,
             )
-            # In the metric of M >= M_L: ||M^-1/2 X M^-1/2|| <= ||L^-1 X L^-T||, ||M^-1/2 x|| <= ||L^-1 x||.
+            # In the metric of M >= M_L: ||M^-1/2 X M^-1/2|| <= ||L^-1 X L^-T||.
             L = np.linalg.cholesky(ML)
             n = len(q)
             scaled = [_scaled(L, _scaled(L, C).T) for C in grid.coriolis[j]]
@@ -205,7 +205,6 @@ class _Piece:
                 math.sqrt(sum(np.linalg.norm(X, 2) ** 2 for X in scaled[:n])),
                 math.sqrt(sum(np.linalg.norm(X, 2) ** 2 for X in scaled[n:])),
             )
-            self.drift[j] = np.linalg.norm(_scaled(L, grid.torque_rate[j]))
         Kr = grid.Kr
         uniform = np.ptp(Kr) == 0
         self.K = Kr.max() * (
