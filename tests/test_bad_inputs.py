@@ -159,6 +159,14 @@ CASES: dict[str, Case] = {
     "box_expression_overflow": _box_case("links: {link2: {mass: ['+0', '10**10**10']}}", "links.link2.mass", "'10**10**10' overflows"),
     "box_literal_overflow": _box_case("links: {link2: {mass: 1e309}}", "links.link2.mass", "'1e309' overflows"),
     "box_disturbance_overflow": _box_case("disturbance: 1e309", "disturbance", "overflows"),
+    # ------------------------------------------------- joint drives (issue 12)
+    "box_joint_unknown": _box_case("joints: {joint3: {friction: [0, 1]}}", "joints.joint3", "unknown joint 'joint3'", "joint1, joint2"),
+    "box_joint_unknown_key": _box_case("joints: {joint2: {frction: [0, 1]}}", "joints.joint2.frction", "did you mean 'friction'"),
+    "box_joint_negative_friction": _box_case("joints: {joint2: {friction: [-1, 1]}}", "joints.joint2.friction", "negative lower end", ">= 0"),
+    "box_joint_negative_armature": _box_case("joints: {joint1: {armature: ['-0.1', '+0.1']}}", "joints.joint1.armature", "negative lower end"),
+    "box_joint_nominal_outside": _box_case("joints: {joint1: {damping: [1, 2], nominal: {damping: 3}}}", "joints.joint1.damping", "outside the box", "nominal"),
+    "box_joint_negative_nominal": _box_case("joints: {joint1: {nominal: {friction: -1}}}", "joints.joint1.nominal.friction", ">= 0"),
+    "box_joint_relative_lo_gt_hi": _box_case("joints: {joint1: {friction: [2, 1]}}", "joints.joint1.friction", "greater than"),
     # ------------------------------------------------------------ API mistakes (issue 10.6)
     "box_for_another_robot": Case({}, _check("ur5", str(RR_DIR / "uncertainty.yaml")), lambda tmp: urpc.load_uncertainty("rr_planar", urpc.load_robot("ur5")), ("this box is for robot 'rr_planar'", "not for 'ur5'", "field 'robot'"), names_file="uncertainty.yaml"),
     # ---------------------------------------------------------------- states and methods

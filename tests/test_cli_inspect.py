@@ -30,7 +30,11 @@ def test_robots_json_lists_shipped_and_not_supported(capsys):
     code, out, _ = _run(capsys, "robots", "--json")
     listing = json.loads(out)
     assert code == 0 and set(listing["shipped"]) == {"rr_planar", "ur5", "panda"}
-    assert listing["shipped"]["ur5"]["scenarios"] == ["ur5/heavy_payload", "ur5/sampled"]
+    assert listing["shipped"]["ur5"]["scenarios"] == [
+        "ur5/heavy_payload",
+        "ur5/joint_friction",
+        "ur5/sampled",
+    ]
     assert listing["shipped"]["rr_planar"]["parameter_points"] == ["rr_planar/true_parameters"]
     assert {"anymal", "go1", "talos_full_v2"} <= set(listing["not_supported"])
     assert not set(listing["not_supported"]) & set(listing["example_robot_data"])

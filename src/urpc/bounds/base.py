@@ -5,6 +5,10 @@ mismatch torque of the paper's eq. (7) is::
 
     w = (M - M0) qdd_a + (C - C0) qd_a + (g - g0) - d = Y_SL(q, qd, qd_a, qdd_a) (pi - pi0) - d
 
+plus, when the joints have armature, damping or friction (:mod:`urpc.model.joint_dynamics`), the
+joint terms ``(Ia - Ia0) qdd_a + (Dv - Dv0) qd + f_c - Fc0 sat(qd / v_s)``, which depend on
+other parameters than the links' and are added exactly (:meth:`BoundMethod.add_joint_terms`).
+
 A bound method returns ``lower, upper`` with ``lower_i <= w_i <= upper_i`` for every parameter
 point of the box (and every ``||d|| <= beta_d`` when the disturbance bound is known, Theorem 1;
 ``d = 0`` when it is unknown, Theorem 2), and ``rho_i = max(|lower_i|, |upper_i|)`` (eq. 9).
@@ -19,6 +23,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..errors import InputError
+from ..model.joint_dynamics import STICTION_VELOCITY, joint_enclosure
 from ..model.regressor import placement_matrix
 from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
@@ -59,12 +64,30 @@ class BoundMethod(ABC):
         self.robot = box.nominal_robot(robot)
         self.box = box
         self.disturbance_bound = box.disturbance_bound
+        joints = box.joint_box(self.robot)
+        #: The joint box when any joint has armature, damping or friction, else ``None``.
+        self.joints = joints if joints.active else None
 
     def enclose(
         self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """``(lower, upper)`` [N m] enclosing ``w`` at this state, over the whole box."""
-        return self.enclose_regressor(self.regressor(q, qd, qd_a, qdd_a))
+        lower, upper = self.enclose_regressor(self.regressor(q, qd, qd_a, qdd_a))
+        return self.add_joint_terms(lower, upper, qd, qdd_a)
+
+    def add_joint_terms(
+        self, lower: np.ndarray, upper: np.ndarray, qd: np.ndarray, qdd_a: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Adds the enclosure of the joint terms (:meth:`~urpc.model.joint_dynamics.JointBox.
+        enclose`) to ``lower, upper`` in place, and returns them; nothing without joint terms.
+        :meth:`enclose_regressor` covers the links only."""
+        joints = self.joints
+        if joints is not None:
+            joint_enclosure(
+                np.asarray(qd, dtype=float), np.asarray(qdd_a, dtype=float), joints.nominal,
+                joints.lower, joints.upper, STICTION_VELOCITY, lower, upper,
+            )  # fmt: skip
+        return lower, upper
 
     def rho(self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray) -> np.ndarray:
         """``rho_i = max(|lower_i|, |upper_i|)`` [N m], the paper's eq. (9)."""
@@ -85,7 +108,8 @@ class BoundMethod(ABC):
     def enclose_regressor(
         self, Y: np.ndarray, envelope: float | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
-        """``(lower, upper)`` from a Slotine-Li regressor ``Y`` (shape ``dof x 10 dof``).
+        """``(lower, upper)`` from a Slotine-Li regressor ``Y`` (shape ``dof x 10 dof``): the
+        link parameters' part of ``w`` (add :meth:`add_joint_terms` for the joints').
 
         Args:
             Y: ``Y_SL`` at the state.

@@ -121,7 +121,8 @@ class HullBound(BoundMethod):
     def enclose(self, q, qd, qd_a, qdd_a):
         Y4 = self._scaled_regressor(q, qd, qd_a, qdd_a)
         center, radius = self._center_radius(Y4, self._regressor.envelope)
-        return self._add_disturbance(center - radius, center + radius)
+        lower, upper = self._add_disturbance(center - radius, center + radius)
+        return self.add_joint_terms(lower, upper, qd, qdd_a)
 
     def enclose_regressor(
         self, Y: np.ndarray, envelope: float | None = None
@@ -133,6 +134,8 @@ class HullBound(BoundMethod):
     def rho(self, q, qd, qd_a, qdd_a):
         """``|center| + radius`` (= ``max(|lower|, |upper|)``) [N m]. ``ndarray.dot`` rather than
         ``@``: the same BLAS call with half the Python overhead."""
+        if self.joints is not None:
+            return super().rho(q, qd, qd_a, qdd_a)
         Y4 = self._scaled_regressor(q, qd, qd_a, qdd_a)
         rho = np.abs(Y4).dot(self._radius_weight)
         linear = np.abs(Y4.dot(self._linear))  # |center| (and the placed radius terms)

@@ -167,7 +167,7 @@ class VertexBound(BoundMethod):
 
     def enclose(self, q, qd, qd_a, qdd_a):
         self._scaled_regressor(q, qd, qd_a, qdd_a, out=self._Y4)
-        return self._enclosure(self._regressor.envelope)
+        return self.add_joint_terms(*self._enclosure(self._regressor.envelope), qd, qdd_a)
 
     def enclose_regressor(
         self, Y: np.ndarray, envelope: float | None = None
@@ -181,6 +181,8 @@ class VertexBound(BoundMethod):
         return self._add_disturbance(-extent[1], extent[0].copy())
 
     def rho(self, q, qd, qd_a, qdd_a):
+        if self.joints is not None:
+            return super().rho(q, qd, qd_a, qdd_a)
         self._scaled_regressor(q, qd, qd_a, qdd_a, out=self._Y4)
         rho = self._evaluate(self._regressor.envelope)[2]
         return rho + self.disturbance_bound if self.disturbance_bound else rho.copy()

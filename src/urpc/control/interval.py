@@ -6,7 +6,9 @@ With the tracking error ``e = q_d - q`` and the diagonal gain ``Kr``::
     u     = M0(q) qdd_a + C0(q, qd) qd_a + g0(q) - v                                    (4)
     v     = -(kappa(t) ||rho|| + phi(t)) r                                              (10)
 
-``M0, C0, g0`` are the nominal model (``C`` the Christoffel factorization) and ``rho`` [N m] the
+``M0, C0, g0`` are the nominal model (``C`` the Christoffel factorization; with joint dynamics,
+``M0`` includes the nominal armature and ``u`` adds the nominal friction ``Dv0 qd + Fc0 sat(qd /
+v_s)``, :mod:`urpc.model.joint_dynamics`) and ``rho`` [N m] the
 per-joint magnitude ``max(|lower_i|, |upper_i|)`` of an enclosure of the mismatch torque ``w``
 over the parameter box (eq. 9), computed by a :class:`~urpc.bounds.BoundMethod` at every step.
 
@@ -128,6 +130,7 @@ class IntervalPassivityController(Controller):
                 PHI_MAX_FACTOR * inertia_bounds.max_upper_eigenvalue / self.sample_period,
             )
         self._s_max = (self.phi_max - self.phi_P) / self.phi_I
+        self._joints = bound.joints
         self._uses_regressor = bound.uses_regressor
         self._pi0 = np.asarray(self.robot.nominal_parameters, dtype=float)
         if self._uses_regressor:
@@ -170,14 +173,20 @@ class IntervalPassivityController(Controller):
         qd_a = reference.qd + Kr_e
         qdd_a = reference.qdd + Kr * ed
         r = ed + Kr_e
+        joints = self._joints
         if self._uses_regressor:
             Y = self._regressor(q, qd, qd_a, qdd_a)
             nominal = Y @ self._pi0
             lower, upper = self._enclose_regressor(Y)
+            if joints is not None:  # the regressor carries neither armature nor friction
+                nominal += joints.nominal_torque(qd, qdd_a, armature=True)
+                self.bound.add_joint_terms(lower, upper, qd, qdd_a)
         else:
             robot = self.robot
-            nominal = robot.M(q) @ qdd_a + robot.C(q, qd) @ qd_a + robot.g(q)
+            nominal = robot.M(q) @ qdd_a + robot.C(q, qd) @ qd_a + robot.g(q)  # with armature
             lower, upper = self.bound.enclose(q, qd, qd_a, qdd_a)
+            if joints is not None:
+                nominal += joints.nominal_torque(qd, qdd_a, armature=False)
         # rho_i = max(|lower_i|, |upper_i|) = max(-lower_i, upper_i) since lower_i <= upper_i.
         rho = np.maximum(-lower, upper)
         rho_norm = math.sqrt(rho @ rho)

@@ -20,6 +20,7 @@ from ..model.inertia_bounds import InertiaBounds
 from ..model.uncertainty import ParameterBox
 from ..sim.trajectories import Trajectory
 from .interval import PHI_MAX_FACTOR, IntervalPassivityController
+from .sampled_joints import JointTerms
 
 #: Grid points along the reference where the certificate's quantities are evaluated.
 GRID_POINTS = 120
@@ -64,6 +65,7 @@ class FloorGrid:
             ]
         )
         self.grid_step = float(times[1] - times[0])
+        self.joints = JointTerms(self.bound.joints)
         self._regressors: dict[float, list[list[np.ndarray]]] = {}
         self.pieces = [_Piece(self, piece) for piece in split_box(self.bound.box)]
 
@@ -111,8 +113,10 @@ class FloorGrid:
         return max(c.phi_P, PHI_MAX_FACTOR * self.law_bounds.max_upper_eigenvalue / T)
 
     def _floor_at(self, T: float, d: float, tube: float) -> tuple[float, dict]:
-        """The floor for a fixed tube: the worst piece."""
+        """The floor for a fixed tube: the worst piece (the joints' Coulomb friction counts as
+        disturbance, :class:`JointTerms`)."""
         worst, parts = -math.inf, {}
+        d = d + self.joints.coulomb
         for piece in self.pieces:
             floor, piece_parts = piece.floor_at(T, d, tube, self.gain(T))
             if floor > worst or not parts:
@@ -240,13 +244,18 @@ class _Piece:
                         magnitude += np.sqrt(np.max(np.sum(torques**2, axis=0)))
                     R[j], V[j] = max(R[j], equilibrium), max(V[j], magnitude)
                     RM[j] = max(RM[j], in_metric)
+                # The joints' smooth terms, per component at most c (triangle inequality).
+                c = grid.joints.smooth(grid.qd[j], grid.qdd[j], grid.Kr, tube)
+                R[j] += np.linalg.norm(np.abs(inverse) @ c)
+                RM[j] += np.linalg.norm(np.abs(self.to_metric[j]) @ c)
+                V[j] += np.linalg.norm(c)
                 if j + 1 < count:
                     change = 0.0
                     for columns, A, vertices in self.links:
                         step = grid.law_inverse[j + 1] @ regressors[j + 1][0][:, columns]
                         step = (step - inverse @ regressors[j][0][:, columns]) @ A @ vertices
                         change += np.sqrt(np.max(np.sum(step**2, axis=0)))
-                    S[j] = change / grid.grid_step
+                    S[j] = (change + grid.joints.change(grid, j, tube)) / grid.grid_step
             S[-1] = S[-2] if count > 1 else 0.0
             self._mismatch[key] = (R, RM, V, S)
         return self._mismatch[key]
@@ -275,7 +284,11 @@ class _Piece:
         response_M = T * d / (a * sqrt_L)
         r_sup = 0.0
         for _ in range(50):
-            b = T * (self.K * (0.5 + self.nu) + (1.0 + self.nu) * self.gamma * (speed + r_sup))
+            b = T * (
+                self.K * (0.5 + self.nu)
+                + (1.0 + self.nu) * self.gamma * (speed + r_sup)
+                + grid.joints.damping / lam_L
+            )
             margin = float(np.min(a - b))
             if r_sup == 0.0:
                 parts = {"contraction": float(np.min(a)), "margin": margin, "gain_D": float(D)}

@@ -11,7 +11,7 @@ from typing import Any
 from pydantic import Field, model_validator
 
 from .base import FieldError, FileFormat
-from .uncertainty import _H, _I_O, PHYSICAL_FIELDS, PhysicalPoint
+from .uncertainty import _H, _I_O, PHYSICAL_FIELDS, JointPoint, PhysicalPoint
 from .values import NonNegative, Number, Positive, Text
 
 
@@ -72,3 +72,7 @@ class ParameterPointFile(FileFormat):
         default_factory=dict, description="URDF link name -> its parameters"
     )
     payload: PayloadPoint | None = Field(None, description="the box's payload")
+    joints: dict[str, JointPoint] = Field(
+        default_factory=dict,
+        description="joint name -> its armature, damping and friction (others stay nominal)",
+    )

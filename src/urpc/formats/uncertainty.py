@@ -1,4 +1,4 @@
-"""The uncertainty file: which link inertial parameters are uncertain, and by how much.
+"""The uncertainty file: which link inertial and joint parameters are uncertain, and by how much.
 
 Documented in ``docs/uncertainty-format.md``; read by :func:`urpc.model.uncertainty.load_uncertainty`,
 which resolves every interval against the URDF's nominal value. Module files carry one
@@ -126,6 +126,43 @@ class PayloadEntry(PhysicalBox):
         return data
 
 
+_ARMATURE = "armature: rotor inertia reflected to the joint [kg m^2] (kg for a prismatic joint)"
+_DAMPING = "viscous damping coefficient [N m s/rad] (N s/m for a prismatic joint)"
+_FRICTION = "Coulomb (dry) friction torque [N m] (N for a prismatic joint)"
+
+
+class JointPoint(FileFormat):
+    """Single values of a joint's parameters (each >= 0)."""
+
+    armature: NonNegative("kg m^2") | None = Field(None, description=_ARMATURE)
+    damping: NonNegative("N m s/rad") | None = Field(None, description=_DAMPING)
+    friction: NonNegative("N m") | None = Field(None, description=_FRICTION)
+
+    def values(self) -> dict[str, float]:
+        return {k: v for k, v in self.model_dump().items() if v is not None}
+
+
+class JointEntry(FileFormat):
+    """The box of one joint's drive: armature, viscous damping and Coulomb friction (fields not
+    given stay exact at their nominal)."""
+
+    armature: IntervalEntry | None = _interval(_ARMATURE)
+    damping: IntervalEntry | None = _interval(_DAMPING)
+    friction: IntervalEntry | None = _interval(_FRICTION)
+    nominal: JointPoint | None = Field(
+        None,
+        description="the controller's nominal values; default: the URDF's <dynamics> damping "
+        "and friction (armature 0), or the middle of an absolute interval that excludes it",
+    )
+
+    def entries(self) -> dict[str, Any]:
+        """The given intervals by field name."""
+        return {key: getattr(self, key) for key in JOINT_FIELDS if getattr(self, key) is not None}
+
+
+#: The joint parameters, in the order of :class:`urpc.model.joint_dynamics.JointBox` rows.
+JOINT_FIELDS: tuple[str, ...] = ("armature", "damping", "friction")
+
 #: A bound on the input disturbance ``||d||`` [N m], or ``unknown`` (``None``).
 Disturbance = NonNegative("N m", keyword="unknown")
 
@@ -142,3 +179,8 @@ class UncertaintyFile(FileFormat):
         default_factory=dict, description="URDF link name -> its box (moving links only)"
     )
     payload: PayloadEntry | None = Field(None, description="one uncertain body fixed to a link")
+    joints: dict[str, JointEntry] = Field(
+        default_factory=dict,
+        description="joint name -> the box of its drive: armature, damping, friction "
+        "(joints not listed keep the URDF's <dynamics>, exactly)",
+    )

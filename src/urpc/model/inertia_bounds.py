@@ -16,7 +16,8 @@ Physical box (mass ``m in [m_lo, m_hi]``, CoM ``c``, inertia about the CoM ``I_c
     Sigma <= spatial(m_hi (1 + theta), c0, I_c0 + (mu_hi + m_hi (1 + 1/theta) Delta^2) 1)
 
 where ``mu_lo >= lambda_max(I_c0 - I_c)`` and ``mu_hi >= lambda_max(I_c - I_c0)`` over the box
-(Gershgorin discs of the interval matrices). Barycentric box (``pi = [m, h, I_O]`` in intervals):
+(Gershgorin discs of the interval matrices). The joints' armature adds ``diag(Ia)`` to
+``M``: its lower and upper ends go to ``M_L`` and ``M_U``. Barycentric box (``pi = [m, h, I_O]`` in intervals):
 ``Sigma(pi) - Sigma(pi0) = Sigma(delta)`` and, for any ``alpha > 0``,
 ``[[0, -S(h)], [S(h), 0]] >= -diag(alpha 1, |h|^2 / alpha 1)``, so::
 
@@ -81,7 +82,16 @@ class InertiaBounds:
         lower, upper = {}, {}
         for link_box in self.box.uncertain_links:
             lower[link_box.link], upper[link_box.link] = spatial_bounds(link_box, scale)
-        return self.robot.with_link_inertias(lower), self.robot.with_link_inertias(upper)
+        lower_robot = self.robot.with_link_inertias(lower)
+        upper_robot = self.robot.with_link_inertias(upper)
+        joints = self.box.joints
+        if joints is not None and joints.uncertain[0].any():  # armature adds to the diagonal
+            values = self.robot.joint_parameters
+            values[0] = joints.lower[0]
+            lower_robot = lower_robot.with_joint_parameters(values)
+            values[0] = joints.upper[0]
+            upper_robot = upper_robot.with_joint_parameters(values)
+        return lower_robot, upper_robot
 
     def lower(self, q: np.ndarray) -> np.ndarray:
         """``M_L(q)`` [kg m^2]: ``M(q, pi) - M_L(q)`` is positive semi-definite on the box."""

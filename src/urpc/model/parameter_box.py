@@ -1,4 +1,4 @@
-"""Parameter boxes: intervals on link inertial parameters, and the disturbance bound.
+"""Parameter boxes: intervals on link inertial and joint parameters, and the disturbance bound.
 
 A :class:`ParameterBox` holds one :class:`LinkBox` per uncertain link or payload, each in physical
 coordinates (``mass`` [kg], center of mass ``com_x, com_y, com_z`` in the link frame [m], rotational
@@ -18,7 +18,12 @@ import numpy as np
 import pinocchio as pin
 
 from ..formats.uncertainty import BARYCENTRIC_FIELDS, PHYSICAL_FIELDS
+from .joint_dynamics import JointBox
 from .robot import Robot
+
+#: The key of a parameter point (:meth:`ParameterBox.plant`) that holds the joint parameters, a
+#: ``(3, dof)`` array (armature, damping, friction); angle brackets cannot start a URDF link name.
+JOINTS = "<joints>"
 
 # PHYSICAL_FIELDS (mass, CoM in the link frame, inertia about the CoM in Pinocchio's component
 # order xx, xy, yy, xz, yz, zz) and BARYCENTRIC_FIELDS are the fields of the file format.
@@ -28,6 +33,21 @@ UNITS = {
 }  # fmt: skip
 
 Kind = Literal["physical", "barycentric"]
+
+
+def link_points(point: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The link and payload entries of a parameter point (without :data:`JOINTS`)."""
+    return {name: values for name, values in point.items() if name != JOINTS}
+
+
+def joint_values(box: ParameterBox, point: Mapping[str, np.ndarray]) -> dict[str, float]:
+    """``joint.field -> value`` of the uncertain joint parameters of a point (empty without)."""
+    joints = box.joints
+    if joints is None or JOINTS not in point:
+        return {}
+    values = np.asarray(point[JOINTS], dtype=float).reshape(3, joints.dof)
+    rows, columns = np.nonzero(joints.uncertain)
+    return {joints.name(r, c): float(values[r, c]) for r, c in zip(rows, columns, strict=True)}
 
 
 def physical_coordinates(inertia: pin.Inertia) -> np.ndarray:
@@ -117,6 +137,9 @@ class ParameterBox:
         disturbance_bound: Bound on the input disturbance ``||d||`` [N m], or ``None`` when it is
             unknown (the paper's Theorem 2 case).
         source: The file the box was read from, if any.
+        joints: The box of the joints' armature, damping and friction
+            (:mod:`urpc.model.joint_dynamics`), or ``None``: the robot's own joint parameters
+            (its URDF's ``<dynamics>``) are exact.
     """
 
     links: tuple[LinkBox, ...]
@@ -124,6 +147,13 @@ class ParameterBox:
     disturbance_bound: float | None = None
     source: str | None = None
     robot_name: str | None = field(default=None, compare=False)
+    joints: JointBox | None = None
+
+    def joint_box(self, robot: Robot) -> JointBox:
+        """The joint box, or the exact one of ``robot``'s own joint parameters."""
+        if self.joints is not None:
+            return self.joints
+        return JointBox.exact(robot.joint_names, robot.joint_parameters)
 
     def link_box(self, name: str) -> LinkBox:
         for box in self.links:
@@ -136,22 +166,33 @@ class ParameterBox:
         return tuple(b for b in self.links if b.uncertain.any())
 
     def nominal_robot(self, robot: Robot) -> Robot:
-        """The controller's model: ``robot`` with every payload attached at its nominal point.
+        """The controller's model: ``robot`` with every payload attached at its nominal point and
+        the nominal joint parameters of :attr:`joints`.
 
-        Idempotent: a robot that already carries the payloads is returned unchanged.
+        Idempotent: a robot that already carries them is returned unchanged.
         """
         for payload in self.payloads:
             if payload.name not in robot.link_names:
                 box = self.link_box(payload.name)
                 robot = robot.with_payload(payload.name, payload.link, box.nominal_inertia)
+        if self.joints is not None and not np.array_equal(
+            robot.joint_parameters, self.joints.nominal
+        ):
+            robot = robot.with_joint_parameters(self.joints.nominal)
         return robot
 
     def plant(self, robot: Robot, point: Mapping[str, np.ndarray] | None = None) -> Robot:
-        """The robot at a parameter point (link or payload name -> coordinates of its box's kind);
-        links not named stay nominal. ``point=None`` gives the nominal robot."""
+        """The robot at a parameter point (link or payload name -> coordinates of its box's kind,
+        and :data:`JOINTS` -> the ``(3, dof)`` joint parameters); what is not named stays
+        nominal. ``point=None`` gives the nominal robot."""
         robot = self.nominal_robot(robot)
         if not point:
             return robot
+        if JOINTS in point:
+            robot = robot.with_joint_parameters(point[JOINTS])
+            point = {k: v for k, v in point.items() if k != JOINTS}
+            if not point:
+                return robot
         boxed = {b.link: b for b in self.links}
         inertias = {}
         for name, values in point.items():
@@ -172,13 +213,27 @@ class ParameterBox:
                 values[k] = box.upper[k] if (index >> bit) & 1 else box.lower[k]
                 bit += 1
             point[box.link] = values
+        joints = self.joints
+        if joints is not None and joints.uncertain.any():
+            values = joints.nominal.copy()
+            for row, column in zip(*np.nonzero(joints.uncertain), strict=True):
+                chosen = joints.upper if (index >> bit) & 1 else joints.lower
+                values[row, column] = chosen[row, column]
+                bit += 1
+            point[JOINTS] = values
         return point
 
     @property
     def n_uncertain(self) -> int:
-        """Number of uncertain coordinates (the box has ``2 ** n_uncertain`` vertices)."""
-        return int(sum(int(b.uncertain.sum()) for b in self.links))
+        """Number of uncertain coordinates, link and joint parameters (the box has
+        ``2 ** n_uncertain`` vertices)."""
+        joints = 0 if self.joints is None else int(self.joints.uncertain.sum())
+        return int(sum(int(b.uncertain.sum()) for b in self.links)) + joints
 
     def sample(self, rng: np.random.Generator) -> dict[str, np.ndarray]:
-        """A point drawn uniformly from the box (not necessarily physically consistent)."""
-        return {b.link: rng.uniform(b.lower, b.upper) for b in self.links}
+        """A point drawn uniformly from the box (not necessarily physically consistent); the
+        joint parameters under :data:`JOINTS` when the box has joint intervals."""
+        point = {b.link: rng.uniform(b.lower, b.upper) for b in self.links}
+        if self.joints is not None and self.joints.uncertain.any():
+            point[JOINTS] = rng.uniform(self.joints.lower, self.joints.upper)
+        return point

@@ -216,7 +216,8 @@ class Robot:
         return q
 
     def M(self, q: np.ndarray) -> np.ndarray:
-        """Joint-space inertia matrix ``M(q)`` [kg m^2], symmetric, ``dof x dof``."""
+        """Joint-space inertia matrix ``M(q)`` [kg m^2], symmetric, ``dof x dof``, the joints'
+        armature included (Pinocchio adds ``model.armature`` to the diagonal)."""
         # Pinocchio fills the upper triangle of a fresh array; mirror it (cached indices: this is
         # on the control step's hot path with the implicit sampled-data law).
         M = pin.crba(self.model, self.data, self.configuration(q))
@@ -262,6 +263,27 @@ class Robot:
         parent = self.link(link)
         payload = LinkInertial(name, parent.joint_index, parent.placement, inertia)
         return self._rebuilt([*self.links, payload])
+
+    @property
+    def joint_parameters(self) -> np.ndarray:
+        """``(3, dof)``: armature [kg m^2], viscous damping [N m s/rad] and Coulomb friction
+        [N m] of every joint (:mod:`urpc.model.joint_dynamics`; the URDF's ``<dynamics>`` gives
+        damping and friction, armature is 0 unless an uncertainty box sets it)."""
+        model = self.model
+        return np.array([model.armature, model.damping, model.friction], dtype=float)
+
+    @property
+    def has_joint_friction(self) -> bool:
+        """Whether any joint has viscous damping or Coulomb friction."""
+        return bool(np.any(self.model.damping) or np.any(self.model.friction))
+
+    def with_joint_parameters(self, values: np.ndarray) -> Robot:
+        """A copy whose joints have other armature, damping and friction (``(3, dof)``, rows as
+        :attr:`joint_parameters`); ``M(q)`` of the copy includes the armature."""
+        values = np.asarray(values, dtype=float).reshape(3, self.dof)
+        model = self.model.copy()
+        model.armature, model.damping, model.friction = (v.copy() for v in values)
+        return Robot(model, self.links, self.name, self.urdf_path, self.locked_joints)
 
     def _rebuilt(self, links: Sequence[LinkInertial]) -> Robot:
         model = self.model.copy()

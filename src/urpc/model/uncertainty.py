@@ -26,7 +26,6 @@ robot (link names, URDF nominal values, physical consistency). The box values li
 from __future__ import annotations
 
 import warnings
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +34,6 @@ import pinocchio as pin
 
 from ..errors import InputError, did_you_mean
 from ..formats.base import read_yaml, validate
-from ..formats.parameter_point import LinkPoint, ParameterPointFile, PayloadPoint
 from ..formats.uncertainty import (
     BARYCENTRIC_FIELDS,
     PHYSICAL_FIELDS,
@@ -54,6 +52,7 @@ from .box_consistency import (
 )
 from .catalog import shipped_file
 from .inertia import inertia_problem
+from .joint_dynamics import resolve_joint_box
 from .parameter_box import (
     UNITS,
     Kind,
@@ -64,6 +63,7 @@ from .parameter_box import (
     inertia_from_physical,
     physical_coordinates,
 )
+from .parameter_point import check_file_arguments, load_parameter_point, outside_box
 from .robot import Robot
 
 __all__ = [
@@ -95,7 +95,7 @@ def load_uncertainty(path: str | Path, robot: Robot) -> ParameterBox:
             a wrong type, lo > hi, a non-positive mass, a nominal outside its box, a
             non-physical nominal inertia.
     """
-    _check_arguments(path, robot, "load_uncertainty", "parse_uncertainty")
+    check_file_arguments(path, robot, "load_uncertainty", "parse_uncertainty")
     path = shipped_file(path, "uncertainty.yaml", "uncertainty box")
     document = read_yaml(path)
     if document is None:
@@ -105,23 +105,6 @@ def load_uncertainty(path: str | Path, robot: Robot) -> ParameterBox:
             source=path,
         )
     return parse_uncertainty(document, robot, source=str(path))
-
-
-def _check_arguments(path: Any, robot: Any, function: str, parser: str | None) -> None:
-    """Typed errors for API mistakes: a document instead of a path, something else than a
-    :class:`~urpc.model.robot.Robot`."""
-    if not isinstance(path, str | Path):
-        instead = f"; for an already parsed document use urpc.{parser}(document, robot)"
-        raise InputError(
-            f"{function}() reads a file: expected a path or a shipped name (str or Path), got "
-            f"{type(path).__name__}" + (instead if parser and isinstance(path, Mapping) else ""),
-            field="path",
-        )
-    if not isinstance(robot, Robot):
-        raise InputError(
-            f"expected a Robot (urpc.load_robot(...)), got {type(robot).__name__} {robot!r:.60}",
-            field="robot",
-        )
 
 
 def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) -> ParameterBox:
@@ -135,7 +118,7 @@ def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) ->
         raise InputError(
             f"expected a Robot (urpc.load_robot(...)), got {type(robot).__name__}", field="robot"
         )
-    hints = {"payload.link": robot.moving_link_names}
+    hints = {"payload.link": robot.moving_link_names, "joints": robot.joint_names}
     spec = validate(UncertaintyFile, document, source, hints=hints)
     if spec.robot is not None and not _same_robot(spec.robot, robot):
         raise InputError(
@@ -174,6 +157,7 @@ def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) ->
         disturbance_bound=spec.disturbance,
         source=source,
         robot_name=robot.name,
+        joints=resolve_joint_box(spec.joints, robot, source),
     )
 
 
@@ -302,92 +286,3 @@ def _resolved(
         return interval.around(None if nominal is None else float(nominal))
     except ValueError as exc:
         raise InputError(str(exc), source=source, field=fieldname) from None
-
-
-# ============================================================================ parameter points
-def load_parameter_point(
-    path: str | Path, robot: Robot, box: ParameterBox
-) -> dict[str, np.ndarray]:
-    """Read a parameter-point file (:class:`urpc.formats.parameter_point.ParameterPointFile`, a
-    true plant) for ``robot`` and ``box``: a path, or a shipped name (``"rr_planar"`` for its
-    ``true_parameters.yaml``, ``"ur5/heavy_payload"``).
-
-    The file uses the names of the uncertainty format, with single numbers::
-
-        links:
-          link2: {mass: 10, com_x: 0.525, iyy: 20/12}
-        payload: {mass: 2.0, com_z: 0.03}
-
-    Links not listed stay at their nominal values. Returns link or payload name -> coordinates
-    (in the kind of that link's box, physical for links without a box), for
-    :meth:`ParameterBox.plant`.
-    """
-    _check_arguments(path, robot, "load_parameter_point", None)
-    if not isinstance(box, ParameterBox):
-        raise InputError(
-            f"expected a ParameterBox (urpc.load_uncertainty(path, robot)), got "
-            f"{type(box).__name__}",
-            field="box",
-        )
-    path = shipped_file(path, "true_parameters.yaml", "parameter point")
-    source = str(path)
-    spec = validate(ParameterPointFile, read_yaml(path), source)
-    nominal_robot = box.nominal_robot(robot)
-    entries: dict[str, LinkPoint | PayloadPoint] = dict(spec.links)
-    if spec.payload is not None:
-        if not box.payloads:
-            raise InputError("this uncertainty box has no payload", source=source, field="payload")
-        entries[box.payloads[0].name] = spec.payload
-    point: dict[str, np.ndarray] = {}
-    for name, entry in entries.items():
-        fieldname = "payload" if isinstance(entry, PayloadPoint) else f"links.{name}"
-        if name not in nominal_robot.moving_link_names:
-            raise InputError(
-                f"unknown link '{name}'; " + did_you_mean(name, nominal_robot.moving_link_names),
-                source=source,
-                field=fieldname,
-            )
-        try:
-            link_box = box.link_box(name)
-        except KeyError:
-            nominal = physical_coordinates(nominal_robot.link(name).inertia)
-            link_box = LinkBox(name, "physical", nominal, nominal, nominal)
-        barycentric = getattr(entry, "barycentric", None) is not None
-        if barycentric != (link_box.kind == "barycentric"):
-            raise InputError(
-                f"the box of '{name}' is {link_box.kind}: give its point in "
-                + (
-                    "barycentric values under 'barycentric:'"
-                    if not barycentric
-                    else "mass, com_*, i**"
-                ),
-                source=source,
-                field=fieldname,
-            )
-        coordinates = link_box.nominal.copy()
-        for key, value in entry.values().items():
-            coordinates[link_box.fields.index(key)] = value
-        problem = inertia_problem(np.asarray(link_box.inertia(coordinates).inertia))
-        if problem:
-            raise InputError(
-                f"the inertia of '{name}' is not physical: {problem}",
-                source=source,
-                field=fieldname,
-            )
-        point[name] = coordinates
-    return point
-
-
-def outside_box(box: ParameterBox, point: Mapping[str, np.ndarray]) -> list[str]:
-    """Names ``link.field`` of the coordinates of ``point`` that lie outside ``box``."""
-    outside = []
-    for name, values in point.items():
-        try:
-            link_box = box.link_box(name)
-        except KeyError:
-            continue
-        for k in np.flatnonzero(
-            (values < link_box.lower - 1e-12) | (values > link_box.upper + 1e-12)
-        ):
-            outside.append(f"{name}.{link_box.fields[k]}")
-    return outside

@@ -9,6 +9,7 @@ import numpy as np
 from flint import arb, ctx
 
 from ...errors import InputError, UrpcError, did_you_mean
+from ...model.joint_dynamics import STICTION_VELOCITY, JointBox
 from ...model.regressor import state_vector_error
 from ...model.robot import Robot
 from ...model.uncertainty import ParameterBox, physical_coordinates
@@ -24,6 +25,7 @@ from .balls import (
     add,
     cross,
     dot,
+    interval_ball,
     lower_float,
     rotate_back,
     scale,
@@ -115,7 +117,8 @@ class RigorousBound(BoundMethod):
     def enclose_balls(
         self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray
     ) -> list[arb]:
-        """Balls containing ``w_i`` [N m or N] for every parameter point of the box (``d = 0``)."""
+        """Balls containing ``w_i`` [N m or N] for every parameter point of the box (``d = 0``),
+        the joint terms included (:func:`joint_balls`)."""
         with ctx.workprec(PRECISION):
             poses, motions = self._forward(*self._state(q, qd, qd_a, qdd_a))
             forces: list[tuple[Vec, Vec] | None] = []
@@ -128,7 +131,11 @@ class RigorousBound(BoundMethod):
                     )
                     force = difference if force is None else add_force(force, difference)
                 forces.append(force)
-            return self._backward(forces, poses)
+            torques = self._backward(forces, poses)
+            if self.joints is not None:
+                joint_terms = joint_balls(self.joints, qd, qdd_a)
+                torques = [t + j for t, j in zip(torques, joint_terms, strict=True)]
+            return torques
 
     def torque_balls(
         self,
@@ -270,3 +277,24 @@ class RigorousBound(BoundMethod):
                 parent = total[joint.parent]
                 total[joint.parent] = moved if parent is None else add_force(parent, moved)
         return tau
+
+
+def joint_balls(joints: JointBox, qd: np.ndarray, qdd_a: np.ndarray) -> list[arb]:
+    """Balls containing the joint terms of ``w`` (:meth:`JointBox.enclose`, here in exact
+    interval arithmetic): ``(Ia - Ia0) qdd_a + (Dv - Dv0) qd`` over the box, plus the Coulomb
+    friction the set-valued law (or the stiction band) allows, minus ``Fc0 sat(qd / v_s)``."""
+    balls = []
+    band = arb(STICTION_VELOCITY)
+    for i in range(joints.dof):
+        v, a = float(qd[i]), float(qdd_a[i])
+        lower, upper, nominal = joints.lower[:, i], joints.upper[:, i], joints.nominal[:, i]
+        ball = interval_ball(lower[0], upper[0]) - arb(nominal[0])
+        ball = ball * arb(a) + (interval_ball(lower[1], upper[1]) - arb(nominal[1])) * arb(v)
+        if v >= STICTION_VELOCITY:
+            friction, shape = interval_ball(lower[2], upper[2]), arb(1)
+        elif v <= -STICTION_VELOCITY:
+            friction, shape = -interval_ball(lower[2], upper[2]), arb(-1)
+        else:
+            friction, shape = interval_ball(-upper[2], upper[2]), arb(v) / band
+        balls.append(ball + friction - arb(nominal[2]) * shape)
+    return balls

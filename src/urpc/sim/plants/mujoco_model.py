@@ -31,6 +31,10 @@ def import_mujoco() -> ModuleType:
     return mujoco
 
 
+#: MuJoCo's ``solimp`` of the joints' friction constraint (``dof_solimp``).
+FRICTION_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+
+
 # ============================================================================== MuJoCo model
 def build_mujoco_model(robot: Robot) -> mujoco.MjModel:
     """Compile ``robot`` into a MuJoCo model from its URDF, with the robot's inertias.
@@ -43,8 +47,10 @@ def build_mujoco_model(robot: Robot) -> mujoco.MjModel:
       rotational inertia about the CoM); bodies of links the robot does not list are massless,
       and links not in the URDF (a payload) become bodies fixed at their placement in their
       joint's frame. MuJoCo itself sums the links welded to each moving body.
-    * No contact, constraint, limit, damping, armature, friction or spring; gravity is
-      Pinocchio's ``model.gravity``; the integrator is RK4.
+    * The joints' drive from the robot's Pinocchio model: ``armature``, viscous ``damping`` and
+      Coulomb friction as MuJoCo's ``frictionloss`` (a soft constraint solved by MuJoCo, an
+      independent treatment of sticking). No contact, limit or spring; gravity is Pinocchio's
+      ``model.gravity``; the integrator is RK4.
 
     Raises:
         InputError: ``mujoco`` is not installed; MuJoCo rejects the URDF; a joint MuJoCo makes
@@ -76,6 +82,12 @@ def build_mujoco_model(robot: Robot) -> mujoco.MjModel:
         joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_FALSE
         joint.damping = joint.stiffness = np.zeros(3)  # MuJoCo 4 polynomial coefficients
         joint.armature = joint.frictionloss = 0.0
+    armature, damping, friction = robot.joint_parameters
+    for k, name in enumerate(robot.joint_names):  # the drive: Pinocchio's model.armature ...
+        joint = spec.joint(name)
+        joint.armature = float(armature[k])
+        joint.damping = np.array([damping[k], 0.0, 0.0])
+        joint.frictionloss = float(friction[k])
 
     option = spec.option
     option.integrator = mujoco.mjtIntegrator.mjINT_RK4
@@ -84,11 +96,13 @@ def build_mujoco_model(robot: Robot) -> mujoco.MjModel:
     disabled = mujoco.mjtDisableBit
     option.disableflags |= (
         disabled.mjDSBL_CONTACT
-        | disabled.mjDSBL_CONSTRAINT
         | disabled.mjDSBL_SPRING
-        | disabled.mjDSBL_DAMPER
         | disabled.mjDSBL_AUTORESET  # a diverged state stays non-finite, and is reported
     )
+    if not np.any(friction):  # frictionloss is MuJoCo's only constraint here
+        option.disableflags |= disabled.mjDSBL_CONSTRAINT
+    if not np.any(damping):
+        option.disableflags |= disabled.mjDSBL_DAMPER
     try:
         model = spec.compile()
     except Exception as exc:
@@ -96,6 +110,11 @@ def build_mujoco_model(robot: Robot) -> mujoco.MjModel:
             f"MuJoCo cannot compile this robot: {exc}", source=robot.urdf_path
         ) from None
     mujoco_joint_indices(model, robot)  # checks joint count, names and types
+    # frictionloss as a stiff soft constraint (impedance 0.9999, time constant two steps; MuJoCo
+    # clamps it to twice the step in use): with the defaults a light joint creeps at tenths of a
+    # rad/s under a torque it should hold, against the set-valued law's rest.
+    model.dof_solimp[:] = FRICTION_SOLIMP
+    model.dof_solref[:] = (2.0 * DEFAULT_MAX_STEP, 1.0)
     return model
 
 

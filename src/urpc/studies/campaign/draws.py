@@ -13,6 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import InputError
+from ...model.parameter_box import link_points
 from ...model.uncertainty import ParameterBox
 from ..scenario import ScenarioSetup
 
@@ -51,7 +52,7 @@ def physically_consistent(box: ParameterBox, point: Mapping[str, Any]) -> bool:
     """Whether every link point of ``point`` is a realizable rigid body: its pseudo-inertia
     matrix (Pinocchio's ``PseudoInertia``) is positive semi-definite, and a massless point
     carries no first or second moment either."""
-    for name, values in point.items():
+    for name, values in link_points(point).items():
         parameters = box.link_box(name).standard_parameters(np.asarray(values, dtype=float))
         if not np.all(np.isfinite(parameters)):
             return False
@@ -128,7 +129,7 @@ def draw_runs(
                 kind=kind,  # type: ignore[arg-type]
                 vertex=vertex,
                 seed=int(disturbance_seed.generate_state(1, np.uint64)[0]),
-                point={name: tuple(float(v) for v in values) for name, values in point.items()},
+                point={name: tuple(np.ravel(values).tolist()) for name, values in point.items()},
                 q0=tuple(float(v) for v in setup.q0 + offset),
                 qd0=tuple(float(v) for v in setup.qd0),
                 rejected=rejected,

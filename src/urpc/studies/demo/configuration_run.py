@@ -149,6 +149,6 @@ def initial_position(
 
 def describe_point(point: Mapping[str, np.ndarray]) -> str:
     return "; ".join(
-        f"{name}: " + ", ".join(f"{value:.6g}" for value in np.asarray(values))
+        f"{name}: " + ", ".join(f"{value:.6g}" for value in np.ravel(values))
         for name, values in point.items()
     )

@@ -9,6 +9,7 @@ from typing import Any
 from ...control.base import Controller
 from ...errors import InputError, did_you_mean
 from ...formats.scenario import IntervalOptions
+from ...model.parameter_box import JOINTS, joint_values, link_points
 from .settings import CONTROLLERS, Scenario
 from .setup import ScenarioSetup, build
 
@@ -123,9 +124,13 @@ def simulate_setup(
 
 def true_parameter_values(setup: ScenarioSetup) -> dict[str, dict[str, float]]:
     """The true values of the uncertain parameters, link -> field -> value (units of the
-    uncertainty format: kg, m, kg m^2); empty when the true plant is the nominal model."""
+    uncertainty format: kg, m, kg m^2), and ``"<joints>"`` -> ``joint.field`` -> value for the
+    joint parameters; empty when the true plant is the nominal model."""
     values: dict[str, dict[str, float]] = {}
-    for name, coordinates in setup.true_point.items():
+    joints = joint_values(setup.box, setup.true_point)
+    if joints:
+        values[JOINTS] = joints
+    for name, coordinates in link_points(setup.true_point).items():
         try:
             link_box = setup.box.link_box(name)
         except KeyError:

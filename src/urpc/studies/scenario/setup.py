@@ -17,6 +17,7 @@ import numpy as np
 
 from ...errors import InputError
 from ...model.inertia import inertia_problem
+from ...model.parameter_box import joint_values, link_points
 from ...model.robot import Robot, load_robot
 from ...model.uncertainty import UNITS, ParameterBox, load_parameter_point, load_uncertainty
 from ...sim.trajectories import (
@@ -166,7 +167,7 @@ def _true_point(
 def describe_point(box: ParameterBox, point: Mapping[str, np.ndarray]) -> str:
     """``link2: mass = 8.18 kg, com_x = 0.507 m, iyy = 1.17 kg m^2`` (uncertain fields only)."""
     parts = []
-    for name, coordinates in point.items():
+    for name, coordinates in link_points(point).items():
         link_box = box.link_box(name)
         fields = [
             f"{field_name} = {coordinates[k]:.6g} {UNITS.get(field_name, 'kg m^2')}"
@@ -174,6 +175,9 @@ def describe_point(box: ParameterBox, point: Mapping[str, np.ndarray]) -> str:
             if link_box.uncertain[k]
         ]
         parts.append(f"{name}: {', '.join(fields) if fields else 'nominal'}")
+    joints = joint_values(box, point)
+    if joints:
+        parts.append("joints: " + ", ".join(f"{k} = {v:.4g}" for k, v in joints.items()))
     return "; ".join(parts) if parts else "nominal"
 
 
@@ -191,7 +195,7 @@ def sample_true_parameters(
         if all(
             inertia_problem(np.asarray(box.link_box(name).inertia(values).inertia)) is None
             and values[0] > 0
-            for name, values in point.items()
+            for name, values in link_points(point).items()
         ):
             return point
     raise InputError(

@@ -1,0 +1,62 @@
+"""The joints' armature, damping and Coulomb friction in the sampled-data floor
+(:mod:`urpc.control.sampled_floor`, docs/sampled-data.md "Joint dynamics")."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..model.joint_dynamics import JointBox
+
+
+class JointTerms:
+    """The joints' part of the mismatch in the argument (docs/sampled-data.md, joint dynamics).
+
+    ``w_joint = (Ia - Ia0) qdd_a + (Dv - Dv0) qd + f_c - Fc0 sat(qd / v_s)`` splits into: the
+    smooth terms at ``r = 0`` (``qd = qd_a``), at most ``c_i = dIa_i |qdd_a,i| + dDv_i |qd_a,i|``
+    per component (``dX_i`` the largest ``|X - X0|`` over the box), which join ``w``; the damping
+    acting on ``r``, ``(Dv - Dv0) r``, a perturbation ``||M^-1/2 dDv M^-1/2|| <= max dDv /
+    lambda_L`` added to ``b``; and the Coulomb term, at most ``Fc_hi,i + Fc0_i`` in magnitude at
+    any instant (sticking, reversals), counted with the disturbance: ``||Fc_hi + Fc0||``.
+
+    Args:
+        joints: The bound's joint box, or ``None`` (rigid joints: every term is zero).
+    """
+
+    def __init__(self, joints: JointBox | None):
+        if joints is None:
+            self.armature = self.viscous = np.zeros(0)
+            self.damping = self.coulomb = 0.0
+            return
+        spread = np.maximum(joints.upper - joints.nominal, joints.nominal - joints.lower)
+        self.armature, self.viscous = spread[0], spread[1]
+        #: ``max_i |Dv_i - Dv0_i|`` [N m s/rad].
+        self.damping = float(spread[1].max())
+        #: ``||Fc_hi + Fc0||`` [N m]: the Coulomb mismatch, counted as disturbance.
+        self.coulomb = float(np.linalg.norm(joints.upper[2] + joints.nominal[2]))
+
+    def smooth(self, qd: np.ndarray, qdd: np.ndarray, Kr: np.ndarray, tube: float) -> np.ndarray:
+        """``c`` [N m] per joint over the tube ``||e|| <= tube`` around the reference ``(qd, qdd)``
+        (``qd_a = qd + Kr e``, ``qdd_a = qdd - Kr^2 e`` at ``r = 0``)."""
+        if self.armature.size == 0:
+            return np.zeros(len(Kr))
+        return self.armature * (np.abs(qdd) + Kr * Kr * tube) + self.viscous * (
+            np.abs(qd) + Kr * tube
+        )
+
+    def change(self, grid: Any, j: int, tube: float) -> float:
+        """The change of ``M_L^-1 w_joint`` from grid point ``j`` to ``j + 1`` (the worst sign
+        of each parameter) on the :class:`~urpc.control.sampled_floor.FloorGrid` ``grid``:
+        ``||dM_L^-1|| ||c|| + || |M_L^-1| dc ||``."""
+        if self.armature.size == 0:
+            return 0.0
+        c = self.smooth(grid.qd[j], grid.qdd[j], grid.Kr, tube)
+        difference = self.armature * np.abs(grid.qdd[j + 1] - grid.qdd[j]) + self.viscous * np.abs(
+            grid.qd[j + 1] - grid.qd[j]
+        )
+        inverse_change = np.linalg.norm(grid.law_inverse[j + 1] - grid.law_inverse[j], 2)
+        return float(
+            inverse_change * np.linalg.norm(c)
+            + np.linalg.norm(np.abs(grid.law_inverse[j + 1]) @ difference)
+        )
