@@ -245,6 +245,50 @@ class SimulationResult:
             "gains": plot_gains(self),
         }
 
+    # ------------------------------------------------------------------ replay
+    def replay(self, path: str | Path, robot: Any = None, **options: Any) -> Path:
+        """Write a 3D replay of this run: one self-contained HTML file (no network, no server)
+        showing the arm moving with ``q``, the desired end-effector path, play, pause and a time
+        slider (:mod:`urpc.sim.replay`, ``docs/replay.md``).
+
+        Args:
+            path: The file to write (an existing folder gets ``replay.html``).
+            robot: The simulated :class:`~urpc.model.robot.Robot`; default: the robot recorded in
+                ``info["robot"]`` by :func:`~urpc.sim.simulation.simulate`, loaded again from its
+                URDF.
+            options: :func:`urpc.sim.replay.replay_html`'s (``title``, ``fps``, ``max_frames``).
+
+        Returns:
+            The file written.
+
+        Raises:
+            InputError: no robot given or recorded, or its URDF is gone.
+        """
+        from .replay import ReplayPart, write_replay
+
+        if robot is None:
+            robot = self._recorded_robot()
+        options.setdefault("title", self.scenario or robot.name)
+        part = ReplayPart(robot, self.t, self.q, self.q_desired, label=self.controller)
+        return write_replay(path, part, **options)
+
+    def _recorded_robot(self) -> Any:
+        from ..model.robot import load_robot
+
+        recorded = self.info.get("robot")
+        if not isinstance(recorded, dict) or not recorded.get("urdf"):
+            raise InputError(
+                "this result does not record its robot; give it: result.replay(path, robot)",
+                field="robot",
+            )
+        if not Path(recorded["urdf"]).is_file():
+            raise InputError(
+                "the robot's URDF recorded in this result no longer exists; give the robot: "
+                "result.replay(path, robot)",
+                source=recorded["urdf"],
+            )
+        return load_robot(recorded["urdf"], recorded.get("locked_joints") or {})
+
 
 def check_writable(directory: str | Path) -> Path:
     """Check, without creating anything, that ``directory`` can be written (it exists as a

@@ -199,6 +199,12 @@ def simulate(
             duration = float(series["t"][-1])
     finally:
         bar.close()
+    # The robot, so that the result can be replayed later (SimulationResult.replay).
+    info["robot"] = {
+        "name": plant.name,
+        "urdf": str(plant.urdf_path),
+        "locked_joints": dict(plant.locked_joints),
+    }
     return SimulationResult(
         **series,
         **common,
