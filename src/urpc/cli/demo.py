@@ -116,6 +116,12 @@ def _common_arguments(p: argparse.ArgumentParser, out: Path) -> None:
         help="start this far from the reference on every joint [rad] (default: on it)",
     )
     add_output_arguments(p, str(out), what="figure and results")
+    p.add_argument(
+        "--replay",
+        action="store_true",
+        help="also write DIR/replay.html: a 3D replay of the arm (each configuration in turn) "
+        "that opens offline in a browser (docs/replay.md)",
+    )
 
 
 def run_reconfigure(args) -> int:
@@ -130,6 +136,7 @@ def run_reconfigure(args) -> int:
         duration=args.duration,
         seed=args.seed,
         initial_offset=args.initial_offset,
+        replay=args.replay,
     )
     if args.json:
         print_json(summary)
@@ -154,6 +161,8 @@ def run_reconfigure(args) -> int:
             f"{'yes' if entry['met'] else 'NO':>5} {entry_time:>9} {final:>17} {wall:>8}"
         )
     print(f"figure  {summary['figure']}")
+    if summary["replay"]:
+        print(f"replay  {summary['replay']}")
     return EXIT_OK
 
 
@@ -172,6 +181,7 @@ def run_tool_change(args) -> int:
         duration=args.duration,
         seed=args.seed,
         initial_offset=args.initial_offset,
+        replay=args.replay,
     )
     if args.json:
         print_json(summary)
@@ -194,4 +204,6 @@ def run_tool_change(args) -> int:
         + f"met {'yes' if summary['met'] else 'NO'}"
     )
     print(f"figure  {summary['figure']}")
+    if summary["replay"]:
+        print(f"replay  {summary['replay']}")
     return EXIT_OK

@@ -28,6 +28,12 @@ from .common import (
     write_error,
 )
 
+#: Help of ``--replay`` (simulate and the demos).
+REPLAY_HELP = (
+    "also write DIR/replay.html: a 3D replay of the run (the arm moving, the desired "
+    "end-effector path, play/pause and a time slider) in one file that opens offline in a "
+    "browser (docs/replay.md)"
+)
 #: Default output folder of ``urpc reproduce-paper``.
 PAPER_OUT = RESULTS_ROOT / "paper"
 
@@ -46,10 +52,12 @@ def register(commands) -> None:
         "second, or the last quarter of a run shorter than 4 s), the torque cost and the gains; "
         "--json prints them as one object; --out DIR (checked before the run) saves result.npz, "
         "result.csv, summary.json, certificate.json, scenario.yaml and the figures "
-        "trajectory.png, error.png, torque.png and gains.png.",
+        "trajectory.png, error.png, torque.png and gains.png; --replay adds replay.html.",
     )
     add_scenario_arguments(p)
-    add_output_arguments(p.add_argument_group("output"), None)
+    output = p.add_argument_group("output")
+    add_output_arguments(output, None)
+    output.add_argument("--replay", action="store_true", help=REPLAY_HELP)
     p.set_defaults(handler=run_simulate)
 
     p = commands.add_parser(
@@ -145,6 +153,8 @@ def run_simulate(args) -> int:
 
     if args.out is not None:
         output_folder(args.out, args.out)  # checked before any work
+    elif args.replay:
+        raise InputError("--replay writes DIR/replay.html: give --out DIR")
     out = args.out
     scenario = scenario_from_arguments(args)
     setup = build(scenario)
@@ -183,6 +193,10 @@ def run_simulate(args) -> int:
         }
         for name, figure in figures.items():
             writers[name] = _savefig(figure)
+        if args.replay:
+            writers["replay.html"] = lambda path: result.replay(
+                path, setup.robot, title=f"{scenario.name}: {setup.robot.name}"
+            )
         try:
             write_files(out, writers)
         except OSError as exc:

@@ -11,6 +11,7 @@ from ...errors import InputError
 from .configuration_run import run_configuration
 from .figures import plot_reconfigure, plot_tool_change
 from .progress import ProgressReporter
+from .replay import reconfigure_parts, tool_change_parts
 from .settings import (
     DEFAULT_CONFIGURATIONS,
     DISTURBANCE_BOUND,
@@ -37,6 +38,7 @@ def reconfigure_demo(
     seed: int = 0,
     initial_offset: float | Sequence[float] | None = None,
     repeats: int = TIMING_REPEATS,
+    replay: bool = False,
 ) -> dict[str, Any]:
     """Run a sequence of arm configurations, each synthesized on the fly with the same settings.
 
@@ -56,10 +58,12 @@ def reconfigure_demo(
         initial_offset: Initial position error [rad] (a number: the same on every joint);
             ``None`` starts on the reference.
         repeats: Timed repeats of each synthesis (the median is reported).
+        replay: Also write ``replay.html``, a 3D replay of every configuration in turn
+            (:mod:`urpc.sim.replay`).
 
     Returns:
         ``{"configurations": [{"name", "modules", "dof", "synthesis_time", "met", ...metrics}],
-        "settings": {...}, "figure": path or None}``.
+        "settings": {...}, "figure": path or None, "replay": path or None}``.
     """
     configurations = list(DEFAULT_CONFIGURATIONS if configurations is None else configurations)
     if not configurations:
@@ -97,9 +101,12 @@ def reconfigure_demo(
             "controller": "interval, default gains (synthesize(robot, box, epsilon, sample_period))",
         },
         "figure": None,
+        "replay": None,
     }
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
+        if replay:
+            summary["replay"] = str(_write_replay(out, reconfigure_parts(runs), "reconfigure"))
         figure_path = out / "reconfigure.png"
         plot_reconfigure(runs, epsilon=epsilon).savefig(figure_path, dpi=110)
         summary["figure"] = str(figure_path)
@@ -120,9 +127,11 @@ def tool_change_demo(
     duration: float = DURATION,
     seed: int = 0,
     initial_offset: float | Sequence[float] | None = None,
+    replay: bool = False,
 ) -> dict[str, Any]:
     """Run :func:`tool_change_run` with the demo's settings; write ``tool_change.png`` and
-    ``tool_change.json`` into ``out_dir`` (nothing when ``None``); return the summary."""
+    ``tool_change.json`` into ``out_dir`` (nothing when ``None``), and with ``replay`` a 3D replay
+    ``replay.html``; return the summary."""
     run = tool_change_run(
         before,
         after,
@@ -135,15 +144,25 @@ def tool_change_demo(
         progress=progress,
     )
     summary = run.summary()
-    summary["figure"] = None
+    summary["figure"] = summary["replay"] = None
     if out_dir is not None:
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
+        if replay:
+            summary["replay"] = str(_write_replay(out, tool_change_parts(run), "tool change"))
         figure_path = out / "tool_change.png"
         plot_tool_change(run).savefig(figure_path, dpi=110)
         summary["figure"] = str(figure_path)
         write_json(out / "tool_change.json", summary)
     return summary
+
+
+def _write_replay(out: Path, parts, title: str) -> Path | None:
+    from ...sim.replay import REPLAY_NAME, write_replay
+
+    if not parts:  # every configuration diverged: nothing moves
+        return None
+    return write_replay(out / REPLAY_NAME, parts, title=title)
 
 
 def write_json(path: Path, payload: Mapping[str, Any]) -> None:
