@@ -1,4 +1,4 @@
-"""Bound methods: soundness against dense sampling of the box, tightness, the margin lemma.
+"""Bound methods: soundness against dense sampling of the box, tightness.
 
 The reference mismatch torque is computed independently of the bound methods, per parameter
 sample: ``plant = box.plant(robot, point)`` and Pinocchio's ``crba`` / ``computeCoriolisMatrix`` /
@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from urpc.bounds import METHODS, default_method, make_bound
 from urpc.bounds.base import ROUNDING_ABSOLUTE
-from urpc.bounds.vertex import VertexBound, curvature_directions, unit_mass_parameters
+from urpc.bounds.vertex import VertexBound
 from urpc.errors import InputError, UrpcError
 from urpc.model.regressor import SlotineLiRegressor
 from urpc.model.uncertainty import LinkBox, ParameterBox, parse_uncertainty
@@ -32,7 +32,7 @@ FAST_METHODS = ["hull", "vertex", "vertex-plain"]
 
 def build(method: str, robot, box):
     if method == "vertex-plain":
-        return VertexBound(robot, box, slope_margin=False)
+        return VertexBound(robot, box, exact_com=False)
     return make_bound(method, robot, box)
 
 
@@ -348,8 +348,8 @@ def test_vertex_is_exact_when_only_masses_are_uncertain(ur5):
 WIDE_COM = {"links": {"wrist_2_link": {"mass": [1.0, 2.0], **{f"com_{a}": "+-0.3" for a in "xyz"}}}}
 
 
-@pytest.mark.parametrize("slope_margin", [True, False])
-def test_vertex_margin_covers_interior_extrema(ur5, slope_margin):
+@pytest.mark.parametrize("exact_com", [True, False])
+def test_vertex_margin_covers_interior_extrema(ur5, exact_com):
     """Through the whole method (regressor, compiled kernel): on a dense CoM grid at both mass
     ends, every ``w`` lies in the enclosure, and at some states the grid's extreme beats every
     vertex, so the curvature margin (not the vertices) is what keeps the bound sound."""
@@ -365,7 +365,7 @@ def test_vertex_margin_covers_interior_extrema(ur5, slope_margin):
     rng = np.random.default_rng(21)
     states = [random_state(rng, ur5.dof) for _ in range(8)]
     sampled = sampled_mismatch(ur5, box, points, states)
-    bound = VertexBound(ur5, box, slope_margin=slope_margin)
+    bound = VertexBound(ur5, box, exact_com=exact_com)
     corner = np.array(corner)
     interior_wins = 0
     for state, w, magnitude in zip(states, sampled.w, sampled.magnitude, strict=True):
@@ -375,133 +375,6 @@ def test_vertex_margin_covers_interior_extrema(ur5, slope_margin):
         interior_wins += np.sum(w.max(axis=0) > w[corner].max(axis=0) + 1e-3 * span)
         interior_wins += np.sum(w.min(axis=0) < w[corner].min(axis=0) - 1e-3 * span)
     assert interior_wins > 0  # without the margin, the vertices alone would not be sound here
-
-
-# ============================================================================== the margin lemma
-def _G(y: np.ndarray, com: np.ndarray) -> float:
-    return float(y @ unit_mass_parameters(com))
-
-
-def test_curvature_directions_are_the_second_derivatives():
-    """``y . d_k = (w_k^2 / 8) G_kk`` against central differences (exact for a quadratic)."""
-    rng = np.random.default_rng(13)
-    for _ in range(20):
-        y, c, widths = rng.normal(size=10), rng.normal(scale=0.3, size=3), rng.uniform(0, 0.2, 3)
-        d = curvature_directions(widths)
-        h = 0.1
-        for k in range(3):
-            e = np.zeros(3)
-            e[k] = h
-            second = (_G(y, c + e) - 2 * _G(y, c) + _G(y, c - e)) / h**2
-            assert y @ d[k] == pytest.approx(widths[k] ** 2 / 8 * second, rel=1e-8, abs=1e-12)
-
-
-def test_vertex_values_plus_margin_bound_g_on_the_com_box():
-    """``max G <= max over vertices + sum_k (w_k^2/8) max(0, -G_kk)`` (and the mirror for the
-    minimum), checked on a dense grid of random boxes; and the margin is needed."""
-    rng = np.random.default_rng(14)
-    interior_beats_vertices = 0
-    for _ in range(40):
-        y = rng.normal(size=10)
-        lo = rng.normal(scale=0.3, size=3)
-        widths = rng.uniform(0, 0.5, 3) * (rng.random(3) > 0.2)
-        hi = lo + widths
-        curvature = curvature_directions(widths) @ y  # (w_k^2 / 8) G_kk
-        vertices = [_G(y, np.array(v)) for v in itertools.product(*zip(lo, hi, strict=True))]
-        grid = [_G(y, np.array(c)) for c in itertools.product(*np.linspace(lo, hi, 9).T)]
-        upper = max(vertices) + np.maximum(0, -curvature).sum()
-        lower = min(vertices) - np.maximum(0, curvature).sum()
-        scale = 1e-12 * (1 + np.abs(grid).max())
-        assert max(grid) <= upper + scale
-        assert min(grid) >= lower - scale
-        interior_beats_vertices += max(grid) > max(vertices) + scale
-    assert interior_beats_vertices > 0  # without the margin some maxima would be missed
-
-
-def _box_bounds(y, lo, hi):
-    """Vertex maxima and minima with the plain and the slope-refined margins (the lemma of
-    ``docs/bounds.md``, written out independently of the implementation)."""
-    widths = hi - lo
-    curvature = curvature_directions(widths) @ y  # (w_k^2 / 8) G_kk
-    corners = np.array(list(itertools.product(*zip(lo, hi, strict=True))))  # x slowest
-    values = np.array([_G(y, c) for c in corners]).reshape(2, 2, 2)
-    bounds = {}
-    for sign in (1.0, -1.0):
-        V = sign * values
-        plain = refined = V.max()
-        for k in range(3):
-            M = max(0.0, -sign * curvature[k])
-            D = (np.take(V, 1, axis=k) - np.take(V, 0, axis=k)).ravel()  # the 4 edges along k
-            sigma = max(0.0, D.min(), -D.max())
-            plain += M
-            refined += max(0.0, M - sigma / 4)
-        bounds[sign] = (sign * plain, sign * refined)
-    return bounds
-
-
-def test_slope_refined_margin_bounds_g_on_the_com_box():
-    """``max G <= max_v G(v) + sum_k max(0, M_k - sigma_k / 4)``, ``sigma_k`` the smallest edge
-    difference along ``k`` when they share a sign (else 0); dense grids of random boxes."""
-    rng = np.random.default_rng(16)
-    tighter = 0
-    for _ in range(40):
-        y = rng.normal(size=10)
-        lo = rng.normal(scale=0.3, size=3)
-        hi = lo + rng.uniform(0, 0.6, 3) * (rng.random(3) > 0.2)
-        grid = [_G(y, np.array(c)) for c in itertools.product(*np.linspace(lo, hi, 9).T)]
-        bounds = _box_bounds(y, lo, hi)
-        scale = 1e-12 * (1 + np.abs(grid).max())
-        (plain_max, refined_max), (plain_min, refined_min) = bounds[1.0], bounds[-1.0]
-        assert max(grid) <= refined_max + scale <= plain_max + 2 * scale
-        assert min(grid) >= refined_min - scale >= plain_min - 2 * scale
-        tighter += refined_max < plain_max - scale
-    assert tighter > 0
-
-
-def _line_extremes(y, lo, hi) -> tuple[float, float]:
-    """Exact max and min of the quadratic ``t -> G(lo + t (hi - lo))`` on [0, 1], from its values
-    at 0, 1/2, 1 (a parabola through three points) and its stationary point."""
-    g0, g1, g2 = (_G(y, lo + t * (hi - lo)) for t in (0.0, 0.5, 1.0))
-    curvature = 4 * (g0 - 2 * g1 + g2)  # second derivative in t
-    candidates = [g0, g2]
-    if curvature != 0:
-        slope0 = g2 - g0 - curvature / 2  # derivative at t = 0
-        t = -slope0 / curvature
-        if 0 < t < 1:
-            candidates.append(g0 + slope0 * t + curvature * t**2 / 2)
-    return max(candidates), min(candidates)
-
-
-def test_slope_refined_margin_along_one_axis():
-    """One uncertain CoM axis: the exact excess of the 1-D quadratic over its end values is
-    ``M (1 - r)^2`` with ``r = min(1, sigma / (4 M))``; the bound adds ``M (1 - r)`` (exact for a
-    steep slope, ``r = 1``, or a slope changing sign, ``r = 0``)."""
-    rng = np.random.default_rng(17)
-    exact_cases = 0
-    for _ in range(60):
-        y = rng.normal(size=10)
-        lo = rng.normal(scale=0.3, size=3)
-        hi = lo.copy()
-        axis = rng.integers(3)
-        hi[axis] += rng.uniform(0.05, 1.5)
-        line_max, line_min = _line_extremes(y, lo, hi)
-        ends = np.array([_G(y, lo), _G(y, hi)])
-        bounds = _box_bounds(y, lo, hi)
-        h = curvature_directions(hi - lo)[axis] @ y  # (w^2 / 8) G''
-        M = abs(h)
-        r = min(1.0, abs(ends[1] - ends[0]) / (4 * M))
-        for sign, extreme in ((1.0, line_max), (-1.0, -line_min)):
-            concave = sign * h < 0
-            end = (sign * ends).max()
-            tolerance = 1e-12 * (1 + np.abs(ends).max() + M)
-            assert extreme == pytest.approx(
-                end + (M * (1 - r) ** 2 if concave else 0), abs=tolerance
-            )
-            added = sign * bounds[sign][1] - end
-            assert added == pytest.approx(M * (1 - r) if concave else 0.0, abs=tolerance)
-            assert sign * bounds[sign][1] >= extreme - tolerance
-            exact_cases += concave and r in (0.0, 1.0)
-    assert exact_cases > 0
 
 
 # ============================================================================== misc

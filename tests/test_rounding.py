@@ -29,7 +29,7 @@ LOCKED = {"panda": ["panda_finger_joint1", "panda_finger_joint2"]}
 
 def build(method, robot, box):
     if method == "vertex-plain":
-        return VertexBound(robot, box, slope_margin=False)
+        return VertexBound(robot, box, exact_com=False)
     return make_bound(method, robot, box)
 
 

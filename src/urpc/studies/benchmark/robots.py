@@ -17,7 +17,7 @@ BENCHMARK_ROBOTS = ("rr_planar", "ur5", "panda")
 _LOCKED = {"panda": ["panda_finger_joint1", "panda_finger_joint2"]}
 #: Extra method variants, benchmarked next to the registered methods.
 VARIANTS: dict[str, Callable[[Robot, ParameterBox], BoundMethod]] = {
-    "vertex-plain": lambda robot, box: VertexBound(robot, box, slope_margin=False),
+    "vertex-plain": lambda robot, box: VertexBound(robot, box, exact_com=False),
 }
 #: Uncertainty of every link of the UR5 and Panda benchmark boxes (the uncertainty file format).
 ALL_LINKS_ENTRY = {
