@@ -19,6 +19,7 @@ import sys
 from urpc.cli.common import jsonable
 from urpc.studies.benchmark import (
     BENCHMARK_ROBOTS,
+    DRIVE_ROBOTS,
     SuiteSettings,
     format_benchmarks,
     format_machine,
@@ -52,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.profile or args.profile_only:
         progress("control-step profile")
         machine = machine_info()
-        profile = profile_control_step(BENCHMARK_ROBOTS, args.repeats)
+        profile = profile_control_step(BENCHMARK_ROBOTS + DRIVE_ROBOTS, args.repeats)
         if args.json:
             document = (
                 {**document, "profile": profile}

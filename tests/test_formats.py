@@ -34,7 +34,7 @@ def expected_format(path: Path) -> str:
         return {"modules": "module", "assemblies": "assembly"}[parts[0]]
     if parts[1] == "scenarios":
         return "scenario"
-    return "uncertainty" if path.name == "uncertainty.yaml" else "parameter-point"
+    return "uncertainty" if path.name.startswith("uncertainty") else "parameter-point"
 
 
 @pytest.mark.parametrize("name", sorted(FORMATS))

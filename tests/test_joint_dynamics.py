@@ -8,6 +8,8 @@ as the independent cross-check.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -17,7 +19,6 @@ from urpc.model.joint_dynamics import STICTION_VELOCITY, friction_shape
 from urpc.model.parameter_box import JOINTS
 from urpc.model.uncertainty import outside_box, parse_uncertainty
 from urpc.sim.plants import make_plant
-from urpc.sim.trajectories import generic_trajectory
 from urpc.studies.scenario import run_scenario
 
 UR5_DRIVES = {
@@ -271,15 +272,26 @@ def test_the_joint_friction_scenarios_meet_epsilon(name, plant):
     assert result.metrics["met"], result.metrics
 
 
-def test_the_certificate_counts_the_joint_terms(ur5):
+def test_the_certificate_counts_the_joint_terms(rr, rr_box):
     """The same controller settings, box with and without drives: the drives' mismatch can
-    only raise the floor (Coulomb counts as disturbance)."""
-    rigid = parse_uncertainty({"links": UR5_DRIVES["links"]}, ur5)
-    drives = parse_uncertainty(UR5_DRIVES, ur5)
-    trajectory = generic_trajectory(ur5)
+    only raise the floor (Coulomb counts as disturbance), and the floor stays finite."""
+    drives = dataclasses.replace(
+        rr_box,
+        joints=parse_uncertainty(
+            {
+                "joints": {
+                    "joint1": {"armature": [0.1, 0.3], "friction": [0.5, 1.5]},
+                    "joint2": {"damping": [0, 2], "friction": [0.2, 0.6]},
+                }
+            },  # fmt: skip
+            rr,
+        ).joints,
+    )
     floors = []
-    for box in (rigid, drives):
-        controller = urpc.synthesize(ur5, box, epsilon=1e-2, sample_period=1e-4)
-        certificate = urpc.certify(controller, trajectory, duration=4.0, disturbance_bound=1.0)
+    for box in (rr_box, drives):
+        controller = urpc.synthesize(rr, box, epsilon=1e-2, sample_period=1e-3)
+        certificate = urpc.certify(
+            controller, urpc.PaperTrajectory(), duration=10.0, disturbance_bound=1.0
+        )
         floors.append(certificate.epsilon_floor)
-    assert floors[1] > floors[0]
+    assert np.isfinite(floors[1]) and floors[1] > floors[0]

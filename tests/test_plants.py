@@ -97,10 +97,20 @@ def mujoco():
 
 
 @pytest.fixture(scope="module")
-def mixed(tmp_path_factory):
+def mixed_with_friction(tmp_path_factory):
+    """The hand-written chain as its URDF says: damping 0.5 and Coulomb friction 0.2 on the elbow."""
     path = tmp_path_factory.mktemp("urdf") / "mixed.urdf"
     path.write_text(MIXED_URDF)
     return load_robot(path)
+
+
+@pytest.fixture(scope="module")
+def mixed(mixed_with_friction):
+    """The chain without its Coulomb friction (damping kept): the two plants then run the same
+    RK4 scheme and agree to rounding; friction's own cross-check is tests/test_joint_dynamics.py."""
+    values = mixed_with_friction.joint_parameters
+    values[2] = 0.0
+    return mixed_with_friction.with_joint_parameters(values)
 
 
 @pytest.fixture(scope="module")
@@ -284,18 +294,24 @@ def test_mujoco_rr_equals_textbook(mujoco, rr_true):
         np.testing.assert_allclose(plant.bias_forces(q, qd), C @ qd + g, rtol=1e-12)
 
 
-def test_mujoco_model_settings(mujoco, mixed):
-    robot = mixed.with_payload("tool", "forearm", PAYLOAD)
+def test_mujoco_model_settings(mujoco, mixed_with_friction):
+    robot = mixed_with_friction.with_payload("tool", "forearm", PAYLOAD)
     plant = make_plant("mujoco", robot)
     model = plant.model
     assert model.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4
     np.testing.assert_array_equal(model.opt.gravity, robot.model.gravity.linear)
     assert model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
-    assert model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
-    assert model.ngeom == 0 and model.nu == 0
-    assert not model.jnt_limited.any()
-    for values in (model.dof_damping, model.dof_armature, model.dof_frictionloss, model.jnt_stiffness):  # fmt: skip
-        assert not np.any(values)
+    # The elbow's Coulomb friction is MuJoCo's frictionloss constraint; no other constraint.
+    assert not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
+    assert model.ngeom == 0 and model.nu == 0 and model.neq == 0
+    assert not model.jnt_limited.any() and not np.any(model.jnt_stiffness)
+    armature, damping, friction = robot.joint_parameters
+    np.testing.assert_array_equal(model.dof_armature, armature)
+    np.testing.assert_array_equal(model.dof_damping, damping)
+    np.testing.assert_array_equal(model.dof_frictionloss, friction)
+    assert damping.tolist() == [0.0, 0.0, 0.5] and friction.tolist() == [0.0, 0.0, 0.2]
+    rigid = make_plant("mujoco", robot.with_joint_parameters(np.zeros((3, 3)))).model
+    assert rigid.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
     assert model.body("tool").mass[0] == PAYLOAD.mass
     assert sum(model.body_mass) == pytest.approx(sum(link.inertia.mass for link in robot.links))
 

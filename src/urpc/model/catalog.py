@@ -120,20 +120,25 @@ def example_robot_data_robots() -> dict[str, RobotEntry]:
     return dict(sorted(robots.items()))
 
 
+#: The file name of a robot's default box; other boxes are ``uncertainty_<what>.yaml``.
+BOX = "uncertainty.yaml"
+
+
 def shipped_data(name: str) -> dict[str, list[Path]]:
-    """What ``robots/<name>/`` ships for a robot known by name: ``"uncertainty"`` (the box),
+    """What ``robots/<name>/`` ships for a robot known by name: ``"uncertainty"`` (the boxes,
+    ``uncertainty.yaml`` first, then ``uncertainty_<what>.yaml``),
     ``"parameter_points"`` (true plants, ``true_parameters.yaml`` first) and ``"scenarios"``.
     Empty lists for a robot that ships nothing (or for a name that is not a folder)."""
     folder = builtin_root() / name
     if not folder.is_dir():
         return {"uncertainty": [], "parameter_points": [], "scenarios": []}
-    box = folder / "uncertainty.yaml"
+    boxes = sorted(folder.glob("uncertainty*.yaml"), key=lambda p: (p.name != BOX, p.name))
     points = sorted(
-        (p for p in folder.glob("*.yaml") if p.name != "uncertainty.yaml"),
+        (p for p in folder.glob("*.yaml") if not p.name.startswith("uncertainty")),
         key=lambda p: (p.name != "true_parameters.yaml", p.name),
     )
     return {
-        "uncertainty": [box] if box.is_file() else [],
+        "uncertainty": boxes,
         "parameter_points": points,
         "scenarios": sorted(folder.glob("scenarios/*.yaml")),
     }

@@ -11,6 +11,7 @@ import pinocchio as pin
 from scipy.integrate import solve_ivp
 
 from ..errors import InputError
+from ..model.joint_dynamics import friction_torque
 from .closed_loop import RunSetup, diverged
 
 #: Default continuous-time integrator and tolerances, chosen by measurement on the paper's
@@ -35,6 +36,8 @@ def run_continuous(
     model, data = plant.model, plant.model.createData()
     aba = pin.aba
     configuration = (lambda q: q) if model.nq == model.nv else plant.configuration
+    friction = plant.has_joint_friction
+    damping, coulomb = np.asarray(model.damping), np.asarray(model.friction)
     step_times: list[float] = []
     clock = time.perf_counter
     furthest = [0.0]
@@ -56,6 +59,8 @@ def run_continuous(
         if t > furthest[0] + 0.005 * duration:
             furthest[0] = t
             bar.update(t / duration)
+        if friction:  # the joints' damping and regularized Coulomb friction (stiff: Radau)
+            u = u - friction_torque(damping, coulomb, qd)
         return np.concatenate((qd, aba(model, data, configuration(q), qd, u), state_rate))
 
     def runaway(t: float, x: np.ndarray) -> float:

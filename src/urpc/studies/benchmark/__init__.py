@@ -20,6 +20,7 @@ bench``: settings, targets, the run and its table) and ``tightness``.
 from .bound_timing import bench_bounds, format_timings
 from .control_step import (
     CONTROL_SCENARIOS,
+    DRIVE_ROBOTS,
     PROFILE_COLUMNS,
     control_setup,
     format_profile,
@@ -52,6 +53,7 @@ from .tightness import Tightness, sample_points, tightness
 from .timing import time_calls
 
 __all__ = [
+    "DRIVE_ROBOTS",
     "ALL_LINKS_ENTRY",
     "BENCHMARK_ROBOTS",
     "CAMPAIGN_SCENARIO",

@@ -21,7 +21,11 @@ CONTROL_SCENARIOS = {
     "rr_planar": "rr_planar/s3_ic1",
     "ur5": "ur5/sampled",
     "panda": "panda/sampled",
+    "ur5_drives": "ur5/joint_friction",
+    "panda_drives": "panda/joint_friction",
 }
+#: The same arms with uncertain armature, damping and friction (the joint terms' cost).
+DRIVE_ROBOTS = ("ur5_drives", "panda_drives")
 
 
 def control_setup(robot_name: str):
@@ -79,7 +83,8 @@ def profile_control_step(
     the diagonal shift), ``crba`` (the bare Pinocchio call) and ``solve`` (LAPACK ``dposv``)
     alone; ``arithmetic`` (a replica of the array arithmetic of ``output`` around those calls:
     ``e``, ``qd_a``, ``qdd_a``, ``r``, ``rho``, its norm, the gain, the sum); ``other`` =
-    ``output`` minus the parts (call overhead, and what the parts lose when they run together
+    ``joint_terms`` (the drives' nominal torque and enclosure, for the ``*_drives`` entries of
+    :data:`DRIVE_ROBOTS`); ``output`` minus the parts (call overhead, and what the parts lose when they run together
     rather than alone); ``output_paper_law`` (the same step with the paper's law, so that the
     difference is the sampled law's cost inside the step); and ``rnea`` for scale.
     """
@@ -153,8 +158,18 @@ def _profile_robot(robot_name: str, repeats: int) -> dict[str, float]:
         functions["crba"] = lambda: pin.crba(lower_robot.model, lower_data, config)
         shifted = inertia().copy()
         functions["solve"] = lambda: dposv(shifted, r, lower=0)
+    joints = controller._joints
+    if joints is not None:
+        scratch_lower, scratch_upper = lower.copy(), upper.copy()
+
+        def joint_terms():
+            # What output() adds for the drives: their nominal torque and their enclosure.
+            joints.nominal_torque(qd, qdd_a, armature=True)
+            bound.add_joint_terms(scratch_lower, scratch_upper, qd, qdd_a)
+
+        functions["joint_terms"] = joint_terms
     times = time_calls(functions, repeats)
-    parts = ("regressor", "bound", "nominal", "arithmetic", "sampled_law")
+    parts = ("regressor", "bound", "nominal", "joint_terms", "arithmetic", "sampled_law")
     times["other"] = times["output"] - sum(times.get(name, 0.0) for name in parts)
     return times
 
@@ -166,6 +181,7 @@ PROFILE_COLUMNS = (
     ("regressor", "regressor Y_SL"),
     ("bound", "bound from Y_SL"),
     ("nominal", "nominal Y_SL pi0"),
+    ("joint_terms", "joint terms"),
     ("arithmetic", "array arithmetic"),
     ("sampled_law", "implicit law"),
     ("inertia", "of which M_L(q) + D T 1"),

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from ...model.parameter_box import JOINTS
 from ..scenario import Scenario
 from .figures import plot_campaign
 from .outputs import (
@@ -85,7 +86,8 @@ class CampaignResult:
                 "rejected_draws": spec.rejected,
             }
             for link, field, k in self.parameter_names:
-                row[f"{link}.{field}"] = spec.point[link][k]
+                column = field if link == JOINTS else f"{link}.{field}"
+                row[column] = spec.point[link][k]
             for j, name in enumerate(self.joint_names):
                 row[f"q0.{name}"] = spec.q0[j]
             final = metrics.get("final_error")

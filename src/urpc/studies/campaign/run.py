@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError
+from ...model.parameter_box import JOINTS
 from ..certification import certificate_fields
 from ..scenario import Scenario, build, build_controller, load_scenario
 from .draws import checked_count, draw_runs
@@ -83,6 +84,13 @@ def run_campaign(
     names = tuple(
         (b.link, b.fields[k], int(k)) for b in setup.box.links for k in np.flatnonzero(b.uncertain)
     )
+    joints = setup.box.joints
+    if joints is not None:  # the drives' draws: columns "joint.field", flat index into (3, dof)
+        rows, columns = np.nonzero(joints.uncertain)
+        names += tuple(
+            (JOINTS, joints.name(r, c), int(r * joints.dof + c))
+            for r, c in zip(rows, columns, strict=True)
+        )
     return CampaignResult(
         scenario=scenario,
         outcomes=tuple(outcomes),
