@@ -98,8 +98,9 @@ def test_vertices_and_draws_cover_the_joint_box(ur5_box):
 
 # ------------------------------------------------------------------------------ the bound
 def _true_w(plant, nominal, q, qd, qd_a, qdd_a, coulomb):
-    """The mismatch with Pinocchio's rigid terms and the closed-form joint terms, for a Coulomb
-    friction torque ``coulomb`` (a member of the set-valued law at ``qd``)."""
+    """The mismatch with Pinocchio's rigid terms and the closed-form joint terms (the plant's drive
+    torque at ``qd`` minus the nominal drive along ``qd_a``), for a Coulomb friction torque
+    ``coulomb`` (a member of the set-valued law at ``qd``)."""
     _, damping, _ = plant.joint_parameters
     _, damping0, friction0 = nominal.joint_parameters
     rigid = (
@@ -108,7 +109,7 @@ def _true_w(plant, nominal, q, qd, qd_a, qdd_a, coulomb):
         + plant.g(q)
         - nominal.g(q)
     )
-    return rigid + (damping - damping0) * qd + coulomb - friction0 * friction_shape(qd)
+    return rigid + damping * qd - damping0 * qd_a + coulomb - friction0 * friction_shape(qd_a)
 
 
 def _coulomb_members(friction, qd, rng):
@@ -162,8 +163,10 @@ def test_the_joint_part_is_the_exact_range(ur5):
         lower, upper = bound.enclose(q, qd, qd_a, qdd_a)
         corners = [
             (ends[0] - joints.nominal[0]) * qdd_a
-            + (ends[1] - joints.nominal[1]) * qd
-            + (ends[2] - joints.nominal[2]) * np.sign(qd)
+            + ends[1] * qd
+            - joints.nominal[1] * qd_a
+            + ends[2] * np.sign(qd)
+            - joints.nominal[2] * friction_shape(qd_a)
             for ends in (
                 np.where(np.array(bits)[:, None], joints.upper, joints.lower)
                 for bits in np.ndindex(2, 2, 2)

@@ -6,7 +6,8 @@ mismatch torque of the paper's eq. (7) is::
     w = (M - M0) qdd_a + (C - C0) qd_a + (g - g0) - d = Y_SL(q, qd, qd_a, qdd_a) (pi - pi0) - d
 
 plus, when the joints have armature, damping or friction (:mod:`urpc.model.joint_dynamics`), the
-joint terms ``(Ia - Ia0) qdd_a + (Dv - Dv0) qd + f_c - Fc0 sat(qd / v_s)``, which depend on
+joint terms ``(Ia - Ia0) qdd_a + Dv qd - Dv0 qd_a + f_c - Fc0 sat(qd_a / v_s)`` (the controller
+compensates the nominal drive along the reference velocity ``qd_a``), which depend on
 other parameters than the links' and are added exactly (:meth:`BoundMethod.add_joint_terms`).
 
 A bound method returns ``lower, upper`` with ``lower_i <= w_i <= upper_i`` for every parameter
@@ -73,10 +74,15 @@ class BoundMethod(ABC):
     ) -> tuple[np.ndarray, np.ndarray]:
         """``(lower, upper)`` [N m] enclosing ``w`` at this state, over the whole box."""
         lower, upper = self.enclose_regressor(self.regressor(q, qd, qd_a, qdd_a))
-        return self.add_joint_terms(lower, upper, qd, qdd_a)
+        return self.add_joint_terms(lower, upper, qd, qd_a, qdd_a)
 
     def add_joint_terms(
-        self, lower: np.ndarray, upper: np.ndarray, qd: np.ndarray, qdd_a: np.ndarray
+        self,
+        lower: np.ndarray,
+        upper: np.ndarray,
+        qd: np.ndarray,
+        qd_a: np.ndarray,
+        qdd_a: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Adds the enclosure of the joint terms (:meth:`~urpc.model.joint_dynamics.JointBox.
         enclose`) to ``lower, upper`` in place, and returns them; nothing without joint terms.
@@ -84,8 +90,9 @@ class BoundMethod(ABC):
         joints = self.joints
         if joints is not None:
             joint_enclosure(
-                np.asarray(qd, dtype=float), np.asarray(qdd_a, dtype=float), joints.nominal,
-                joints.lower, joints.upper, STICTION_VELOCITY, lower, upper,
+                np.asarray(qd, dtype=float), np.asarray(qd_a, dtype=float),
+                np.asarray(qdd_a, dtype=float), joints.nominal, joints.lower, joints.upper,
+                STICTION_VELOCITY, lower, upper,
             )  # fmt: skip
         return lower, upper
 

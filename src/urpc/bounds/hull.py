@@ -122,7 +122,7 @@ class HullBound(BoundMethod):
         Y4 = self._scaled_regressor(q, qd, qd_a, qdd_a)
         center, radius = self._center_radius(Y4, self._regressor.envelope)
         lower, upper = self._add_disturbance(center - radius, center + radius)
-        return self.add_joint_terms(lower, upper, qd, qdd_a)
+        return self.add_joint_terms(lower, upper, qd, qd_a, qdd_a)
 
     def enclose_regressor(
         self, Y: np.ndarray, envelope: float | None = None

@@ -145,7 +145,7 @@ class VertexBound(BoundMethod):
 
     def enclose(self, q, qd, qd_a, qdd_a):
         self._scaled_regressor(q, qd, qd_a, qdd_a, out=self._Y4)
-        return self.add_joint_terms(*self._enclosure(self._regressor.envelope), qd, qdd_a)
+        return self.add_joint_terms(*self._enclosure(self._regressor.envelope), qd, qd_a, qdd_a)
 
     def enclose_regressor(
         self, Y: np.ndarray, envelope: float | None = None

@@ -7,8 +7,8 @@ With the tracking error ``e = q_d - q`` and the diagonal gain ``Kr``::
     v     = -(kappa(t) ||rho|| + phi(t)) r                                              (10)
 
 ``M0, C0, g0`` are the nominal model (``C`` the Christoffel factorization; with joint dynamics,
-``M0`` includes the nominal armature and ``u`` adds the nominal friction ``Dv0 qd + Fc0 sat(qd /
-v_s)``, :mod:`urpc.model.joint_dynamics`) and ``rho`` [N m] the
+``M0`` includes the nominal armature and ``u`` adds the nominal friction along the reference,
+``Dv0 qd_a + Fc0 sat(qd_a / v_s)``, :mod:`urpc.model.joint_dynamics`) and ``rho`` [N m] the
 per-joint magnitude ``max(|lower_i|, |upper_i|)`` of an enclosure of the mismatch torque ``w``
 over the parameter box (eq. 9), computed by a :class:`~urpc.bounds.BoundMethod` at every step.
 
@@ -179,14 +179,14 @@ class IntervalPassivityController(Controller):
             nominal = Y @ self._pi0
             lower, upper = self._enclose_regressor(Y)
             if joints is not None:  # the regressor carries neither armature nor friction
-                nominal += joints.nominal_torque(qd, qdd_a, armature=True)
-                self.bound.add_joint_terms(lower, upper, qd, qdd_a)
+                nominal += joints.nominal_torque(qd_a, qdd_a, armature=True)
+                self.bound.add_joint_terms(lower, upper, qd, qd_a, qdd_a)
         else:
             robot = self.robot
             nominal = robot.M(q) @ qdd_a + robot.C(q, qd) @ qd_a + robot.g(q)  # with armature
             lower, upper = self.bound.enclose(q, qd, qd_a, qdd_a)
             if joints is not None:
-                nominal += joints.nominal_torque(qd, qdd_a, armature=False)
+                nominal += joints.nominal_torque(qd_a, qdd_a, armature=False)
         # rho_i = max(|lower_i|, |upper_i|) = max(-lower_i, upper_i) since lower_i <= upper_i.
         rho = np.maximum(-lower, upper)
         rho_norm = math.sqrt(rho @ rho)

@@ -13,12 +13,13 @@ from ..model.joint_dynamics import JointBox
 class JointTerms:
     """The joints' part of the mismatch in the argument (docs/sampled-data.md, joint dynamics).
 
-    ``w_joint = (Ia - Ia0) qdd_a + (Dv - Dv0) qd + f_c - Fc0 sat(qd / v_s)`` splits into: the
+    ``w_joint = (Ia - Ia0) qdd_a + Dv qd - Dv0 qd_a + f_c - Fc0 sat(qd_a / v_s)`` splits into: the
     smooth terms at ``r = 0`` (``qd = qd_a``), at most ``c_i = dIa_i |qdd_a,i| + dDv_i |qd_a,i|``
-    per component (``dX_i`` the largest ``|X - X0|`` over the box), which join ``w``; the damping
-    acting on ``r``, ``(Dv - Dv0) r``, a perturbation ``||M^-1/2 dDv M^-1/2|| <= max dDv /
-    lambda_L`` added to ``b``; and the Coulomb term, at most ``Fc_hi,i + Fc0_i`` in magnitude at
-    any instant (sticking, reversals), counted with the disturbance: ``||Fc_hi + Fc0||``.
+    per component (``dX_i`` the largest ``|X - X0|`` over the box), which join ``w``; the plant's
+    damping acting on ``r = qd_a - qd``, ``-Dv r``, counted as a perturbation
+    ``||M^-1/2 Dv M^-1/2|| <= max Dv_hi / lambda_L`` added to ``b`` (it dissipates energy, so
+    this is conservative); and the Coulomb term, at most ``Fc_hi,i + Fc0_i`` in magnitude at any
+    instant (sticking, reversals), counted with the disturbance: ``||Fc_hi + Fc0||``.
 
     Args:
         joints: The bound's joint box, or ``None`` (rigid joints: every term is zero).
@@ -31,8 +32,8 @@ class JointTerms:
             return
         spread = np.maximum(joints.upper - joints.nominal, joints.nominal - joints.lower)
         self.armature, self.viscous = spread[0], spread[1]
-        #: ``max_i |Dv_i - Dv0_i|`` [N m s/rad].
-        self.damping = float(spread[1].max())
+        #: ``max_i Dv_hi,i`` [N m s/rad]: the plant's damping on ``r``.
+        self.damping = float(joints.upper[1].max())
         #: ``||Fc_hi + Fc0||`` [N m]: the Coulomb mismatch, counted as disturbance.
         self.coulomb = float(np.linalg.norm(joints.upper[2] + joints.nominal[2]))
 

@@ -119,50 +119,53 @@ class JointBox:
         """``joint.field`` of one parameter."""
         return f"{self.joint_names[column]}.{JOINT_FIELDS[row]}"
 
-    def nominal_torque(self, qd: np.ndarray, qdd_a: np.ndarray, armature: bool) -> np.ndarray:
-        """The controller's compensation of the nominal joint terms [N m]: ``Dv0 qd +
-        Fc0 sat(qd / v_s)``, plus ``Ia0 qdd_a`` when ``armature`` (a nominal torque from the
-        link regressor, which carries no armature)."""
-        torque = friction_torque(self.damping, self.friction, qd)
+    def nominal_torque(self, qd_a: np.ndarray, qdd_a: np.ndarray, armature: bool) -> np.ndarray:
+        """The controller's compensation of the nominal joint terms [N m], along the reference
+        velocity ``qd_a``: ``Dv0 qd_a + Fc0 sat(qd_a / v_s)``, plus ``Ia0 qdd_a`` when
+        ``armature`` (a nominal torque from the link regressor, which carries no armature)."""
+        torque = friction_torque(self.damping, self.friction, qd_a)
         return torque + self.armature * qdd_a if armature else torque
 
-    def enclose(self, qd: np.ndarray, qdd_a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(lower, upper)`` [N m] enclosing the joint part of the mismatch torque::
+    def enclose(
+        self, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``(lower, upper)`` [N m] enclosing the joint part of the mismatch torque (the plant's
+        drive torque minus the controller's compensation along the reference)::
 
-            w_joint = (Ia - Ia0) qdd_a + (Dv - Dv0) qd + f_c - Fc0 sat(qd / v_s)
+            w_joint = (Ia - Ia0) qdd_a + Dv qd - Dv0 qd_a + f_c - Fc0 sat(qd_a / v_s)
 
         for every joint parameter of the box and every friction the set-valued law (or the
         plants' regularization inside the stiction band) allows at ``qd``. Each parameter enters
         one joint's row once, so the interval sum is the exact range (up to rounding)."""
         lower, upper = np.zeros(self.dof), np.zeros(self.dof)
         joint_enclosure(
-            np.asarray(qd, dtype=float), np.asarray(qdd_a, dtype=float),
-            self.nominal, self.lower, self.upper, STICTION_VELOCITY, lower, upper,
+            np.asarray(qd, dtype=float), np.asarray(qd_a, dtype=float),
+            np.asarray(qdd_a, dtype=float), self.nominal, self.lower, self.upper,
+            STICTION_VELOCITY, lower, upper,
         )  # fmt: skip
         return lower, upper
 
 
 @numba.njit(cache=True)
 def joint_enclosure(
-    qd, qdd_a, nominal, lower, upper, band, out_lower, out_upper
+    qd, qd_a, qdd_a, nominal, lower, upper, band, out_lower, out_upper
 ):  # pragma: no cover
     """Adds the enclosure of :meth:`JointBox.enclose` to ``out_lower, out_upper`` (compiled: one
     call per control step)."""
     for i in range(qd.size):
-        a, v = qdd_a[i], qd[i]
-        lo = hi = 0.0
-        magnitude = 0.0
-        # (Ia - Ia0) a and (Dv - Dv0) v: an interval times a number.
-        for row in range(2):
-            x = a if row == 0 else v
-            p = (lower[row, i] - nominal[row, i]) * x
-            q = (upper[row, i] - nominal[row, i]) * x
-            lo += min(p, q)
-            hi += max(p, q)
-            magnitude += abs(p) + abs(q)
+        a, v, va = qdd_a[i], qd[i], qd_a[i]
+        # (Ia - Ia0) a and Dv v - Dv0 va: an interval times a number, minus a number.
+        p = (lower[0, i] - nominal[0, i]) * a
+        q = (upper[0, i] - nominal[0, i]) * a
+        r = lower[1, i] * v
+        s = upper[1, i] * v
+        damping = nominal[1, i] * va
+        lo = min(p, q) + min(r, s) - damping
+        hi = max(p, q) + max(r, s) - damping
+        magnitude = abs(p) + abs(q) + abs(r) + abs(s) + abs(damping)
         # Coulomb: f_c in sign(v) [Fc_lo, Fc_hi] outside the band, anywhere in [-Fc_hi, Fc_hi]
-        # inside it; minus the compensation Fc0 sat(v / band).
-        compensation = nominal[2, i] * min(1.0, max(-1.0, v / band))
+        # inside it; minus the compensation Fc0 sat(va / band).
+        compensation = nominal[2, i] * min(1.0, max(-1.0, va / band))
         if v >= band:
             f_lo, f_hi = lower[2, i], upper[2, i]
         elif v <= -band:

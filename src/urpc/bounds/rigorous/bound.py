@@ -133,7 +133,7 @@ class RigorousBound(BoundMethod):
                 forces.append(force)
             torques = self._backward(forces, poses)
             if self.joints is not None:
-                joint_terms = joint_balls(self.joints, qd, qdd_a)
+                joint_terms = joint_balls(self.joints, qd, qd_a, qdd_a)
                 torques = [t + j for t, j in zip(torques, joint_terms, strict=True)]
             return torques
 
@@ -279,22 +279,29 @@ class RigorousBound(BoundMethod):
         return tau
 
 
-def joint_balls(joints: JointBox, qd: np.ndarray, qdd_a: np.ndarray) -> list[arb]:
+def joint_balls(joints: JointBox, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray) -> list[arb]:
     """Balls containing the joint terms of ``w`` (:meth:`JointBox.enclose`, here in exact
-    interval arithmetic): ``(Ia - Ia0) qdd_a + (Dv - Dv0) qd`` over the box, plus the Coulomb
-    friction the set-valued law (or the stiction band) allows, minus ``Fc0 sat(qd / v_s)``."""
+    interval arithmetic): ``(Ia - Ia0) qdd_a + Dv qd - Dv0 qd_a`` over the box, plus the Coulomb
+    friction the set-valued law (or the stiction band) allows at ``qd``, minus
+    ``Fc0 sat(qd_a / v_s)``."""
     balls = []
     band = arb(STICTION_VELOCITY)
     for i in range(joints.dof):
-        v, a = float(qd[i]), float(qdd_a[i])
+        v, va, a = float(qd[i]), float(qd_a[i]), float(qdd_a[i])
         lower, upper, nominal = joints.lower[:, i], joints.upper[:, i], joints.nominal[:, i]
-        ball = interval_ball(lower[0], upper[0]) - arb(nominal[0])
-        ball = ball * arb(a) + (interval_ball(lower[1], upper[1]) - arb(nominal[1])) * arb(v)
+        ball = (interval_ball(lower[0], upper[0]) - arb(nominal[0])) * arb(a)
+        ball += interval_ball(lower[1], upper[1]) * arb(v) - arb(nominal[1]) * arb(va)
         if v >= STICTION_VELOCITY:
-            friction, shape = interval_ball(lower[2], upper[2]), arb(1)
+            friction = interval_ball(lower[2], upper[2])
         elif v <= -STICTION_VELOCITY:
-            friction, shape = -interval_ball(lower[2], upper[2]), arb(-1)
+            friction = -interval_ball(lower[2], upper[2])
         else:
-            friction, shape = interval_ball(-upper[2], upper[2]), arb(v) / band
+            friction = interval_ball(-upper[2], upper[2])
+        if va >= STICTION_VELOCITY:
+            shape = arb(1)
+        elif va <= -STICTION_VELOCITY:
+            shape = arb(-1)
+        else:
+            shape = arb(va) / band
         balls.append(ball + friction - arb(nominal[2]) * shape)
     return balls

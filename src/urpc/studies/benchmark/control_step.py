@@ -164,8 +164,8 @@ def _profile_robot(robot_name: str, repeats: int) -> dict[str, float]:
 
         def joint_terms():
             # What output() adds for the drives: their nominal torque and their enclosure.
-            joints.nominal_torque(qd, qdd_a, armature=True)
-            bound.add_joint_terms(scratch_lower, scratch_upper, qd, qdd_a)
+            joints.nominal_torque(qd_a, qdd_a, armature=True)
+            bound.add_joint_terms(scratch_lower, scratch_upper, qd, qd_a, qdd_a)
 
         functions["joint_terms"] = joint_terms
     times = time_calls(functions, repeats)
