@@ -97,20 +97,20 @@ def mujoco():
 
 
 @pytest.fixture(scope="module")
-def mixed_with_friction(tmp_path_factory):
-    """The hand-written chain as its URDF says: damping 0.5 and Coulomb friction 0.2 on the elbow."""
+def mixed(tmp_path_factory):
+    """The hand-written chain, rigid: its URDF's <dynamics> (damping 0.5, friction 0.2 on the
+    elbow) are only nominal values for a box's joints: section."""
     path = tmp_path_factory.mktemp("urdf") / "mixed.urdf"
     path.write_text(MIXED_URDF)
     return load_robot(path)
 
 
 @pytest.fixture(scope="module")
-def mixed(mixed_with_friction):
-    """The chain without its Coulomb friction (damping kept): the two plants then run the same
-    RK4 scheme and agree to rounding; friction's own cross-check is tests/test_joint_dynamics.py."""
-    values = mixed_with_friction.joint_parameters
-    values[2] = 0.0
-    return mixed_with_friction.with_joint_parameters(values)
+def mixed_with_friction(mixed):
+    """The chain with the drives its URDF declares, and an armature on the slide."""
+    np.testing.assert_array_equal(mixed.urdf_dynamics, [[0, 0, 0.5], [0, 0, 0.2]])
+    assert not mixed.joint_parameters.any()
+    return mixed.with_joint_parameters(np.vstack([[0.0, 0.3, 0.0], mixed.urdf_dynamics]))
 
 
 @pytest.fixture(scope="module")
@@ -310,6 +310,7 @@ def test_mujoco_model_settings(mujoco, mixed_with_friction):
     np.testing.assert_array_equal(model.dof_damping, damping)
     np.testing.assert_array_equal(model.dof_frictionloss, friction)
     assert damping.tolist() == [0.0, 0.0, 0.5] and friction.tolist() == [0.0, 0.0, 0.2]
+    assert armature.tolist() == [0.0, 0.3, 0.0]
     rigid = make_plant("mujoco", robot.with_joint_parameters(np.zeros((3, 3)))).model
     assert rigid.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
     assert model.body("tool").mass[0] == PAYLOAD.mass

@@ -24,7 +24,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..errors import InputError
-from ..model.joint_dynamics import STICTION_VELOCITY, joint_enclosure
+from ..model.joint_dynamics import STICTION_VELOCITY, joint_terms
 from ..model.regressor import placement_matrix
 from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
@@ -68,6 +68,7 @@ class BoundMethod(ABC):
         joints = box.joint_box(self.robot)
         #: The joint box when any joint has armature, damping or friction, else ``None``.
         self.joints = joints if joints.active else None
+        self._joint_scratch = np.zeros(self.robot.dof)
 
     def enclose(
         self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray
@@ -83,16 +84,20 @@ class BoundMethod(ABC):
         qd: np.ndarray,
         qd_a: np.ndarray,
         qdd_a: np.ndarray,
+        torque: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Adds the enclosure of the joint terms (:meth:`~urpc.model.joint_dynamics.JointBox.
         enclose`) to ``lower, upper`` in place, and returns them; nothing without joint terms.
-        :meth:`enclose_regressor` covers the links only."""
+        :meth:`enclose_regressor` covers the links only. With ``torque``, the same compiled call
+        also adds the nominal drive torque, armature included
+        (:meth:`~urpc.model.joint_dynamics.JointBox.nominal_torque`), to it in place."""
         joints = self.joints
         if joints is not None:
-            joint_enclosure(
+            joint_terms(
                 np.asarray(qd, dtype=float), np.asarray(qd_a, dtype=float),
                 np.asarray(qdd_a, dtype=float), joints.nominal, joints.lower, joints.upper,
-                STICTION_VELOCITY, lower, upper,
+                STICTION_VELOCITY, 0.0 if torque is None else 1.0,
+                self._joint_scratch if torque is None else torque, lower, upper,
             )  # fmt: skip
         return lower, upper
 

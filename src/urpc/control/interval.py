@@ -179,8 +179,7 @@ class IntervalPassivityController(Controller):
             nominal = Y @ self._pi0
             lower, upper = self._enclose_regressor(Y)
             if joints is not None:  # the regressor carries neither armature nor friction
-                nominal += joints.nominal_torque(qd_a, qdd_a, armature=True)
-                self.bound.add_joint_terms(lower, upper, qd, qd_a, qdd_a)
+                self.bound.add_joint_terms(lower, upper, qd, qd_a, qdd_a, torque=nominal)
         else:
             robot = self.robot
             nominal = robot.M(q) @ qdd_a + robot.C(q, qd) @ qd_a + robot.g(q)  # with armature

@@ -138,22 +138,25 @@ class JointBox:
         plants' regularization inside the stiction band) allows at ``qd``. Each parameter enters
         one joint's row once, so the interval sum is the exact range (up to rounding)."""
         lower, upper = np.zeros(self.dof), np.zeros(self.dof)
-        joint_enclosure(
+        joint_terms(
             np.asarray(qd, dtype=float), np.asarray(qd_a, dtype=float),
             np.asarray(qdd_a, dtype=float), self.nominal, self.lower, self.upper,
-            STICTION_VELOCITY, lower, upper,
+            STICTION_VELOCITY, 0.0, np.zeros(self.dof), lower, upper,
         )  # fmt: skip
         return lower, upper
 
 
 @numba.njit(cache=True)
-def joint_enclosure(
-    qd, qd_a, qdd_a, nominal, lower, upper, band, out_lower, out_upper
+def joint_terms(
+    qd, qd_a, qdd_a, nominal, lower, upper, band, armature, out_torque, out_lower, out_upper
 ):  # pragma: no cover
-    """Adds the enclosure of :meth:`JointBox.enclose` to ``out_lower, out_upper`` (compiled: one
-    call per control step)."""
+    """Adds :meth:`JointBox.nominal_torque` (with ``Ia0 qdd_a`` times ``armature``, 0 or 1) to
+    ``out_torque`` and the enclosure of :meth:`JointBox.enclose` to ``out_lower, out_upper``
+    (compiled: one call per control step for both)."""
     for i in range(qd.size):
         a, v, va = qdd_a[i], qd[i], qd_a[i]
+        shape = min(1.0, max(-1.0, va / band))
+        out_torque[i] += armature * nominal[0, i] * a + nominal[1, i] * va + nominal[2, i] * shape
         # (Ia - Ia0) a and Dv v - Dv0 va: an interval times a number, minus a number.
         p = (lower[0, i] - nominal[0, i]) * a
         q = (upper[0, i] - nominal[0, i]) * a
@@ -165,7 +168,7 @@ def joint_enclosure(
         magnitude = abs(p) + abs(q) + abs(r) + abs(s) + abs(damping)
         # Coulomb: f_c in sign(v) [Fc_lo, Fc_hi] outside the band, anywhere in [-Fc_hi, Fc_hi]
         # inside it; minus the compensation Fc0 sat(va / band).
-        compensation = nominal[2, i] * min(1.0, max(-1.0, va / band))
+        compensation = nominal[2, i] * shape
         if v >= band:
             f_lo, f_hi = lower[2, i], upper[2, i]
         elif v <= -band:
@@ -185,11 +188,11 @@ def resolve_joint_box(
     entries: Mapping[str, JointEntry], robot: Robot, source: str | None
 ) -> JointBox:
     """The :class:`JointBox` of the ``joints:`` section of an uncertainty file for ``robot``
-    (joints not listed keep the robot's own values, exactly).
+    (joints not listed stay exact at the URDF's ``<dynamics>`` damping and friction, armature 0).
 
-    Nominal values: the entry's ``nominal:``, else the robot's (its URDF's ``<dynamics>``
-    damping and friction, armature 0) when it lies in the interval, else the middle of the
-    interval (which must then be absolute).
+    Nominal values: the entry's ``nominal:``, else the URDF's (``<dynamics>`` damping and
+    friction, :attr:`Robot.urdf_dynamics`; armature 0) when it lies in the interval, else the
+    middle of the interval (which must then be absolute).
 
     Raises:
         InputError: an unknown or locked joint, a relative interval with no nominal, a nominal
@@ -197,6 +200,7 @@ def resolve_joint_box(
             naming ``source`` and the field.
     """
     values = robot.joint_parameters
+    values[1:] = robot.urdf_dynamics
     nominal, lower, upper = values.copy(), values.copy(), values.copy()
     names = robot.joint_names
     for name, entry in entries.items():

@@ -87,6 +87,7 @@ class Robot:
         name: str,
         urdf_path: Path,
         locked_joints: Mapping[str, float] | None = None,
+        urdf_dynamics: np.ndarray | None = None,
     ):
         self.model = model
         self.data = model.createData()
@@ -94,6 +95,12 @@ class Robot:
         self.urdf_path = Path(urdf_path)
         self.links = tuple(links)
         self.locked_joints = dict(locked_joints or {})
+        #: ``(2, dof)``: the URDF's ``<dynamics damping friction>`` per joint (0 where absent).
+        #: Not part of the dynamics until an uncertainty box's ``joints:`` section says so
+        #: (:func:`~urpc.model.joint_dynamics.resolve_joint_box`); they are its nominal values.
+        self.urdf_dynamics = (
+            np.zeros((2, model.nv)) if urdf_dynamics is None else np.array(urdf_dynamics, float)
+        )
         self._link_by_name = {link.name: link for link in self.links}
         kinds = []
         for j in range(1, model.njoints):
@@ -267,8 +274,9 @@ class Robot:
     @property
     def joint_parameters(self) -> np.ndarray:
         """``(3, dof)``: armature [kg m^2], viscous damping [N m s/rad] and Coulomb friction
-        [N m] of every joint (:mod:`urpc.model.joint_dynamics`; the URDF's ``<dynamics>`` gives
-        damping and friction, armature is 0 unless an uncertainty box sets it)."""
+        [N m] of every joint in the dynamics (:mod:`urpc.model.joint_dynamics`): zero for a
+        loaded robot (rigid), set by an uncertainty box's ``joints:`` section
+        (:meth:`ParameterBox.nominal_robot`, :meth:`ParameterBox.plant`)."""
         model = self.model
         return np.array([model.armature, model.damping, model.friction], dtype=float)
 
@@ -283,13 +291,17 @@ class Robot:
         values = np.asarray(values, dtype=float).reshape(3, self.dof)
         model = self.model.copy()
         model.armature, model.damping, model.friction = (v.copy() for v in values)
-        return Robot(model, self.links, self.name, self.urdf_path, self.locked_joints)
+        return Robot(
+            model, self.links, self.name, self.urdf_path, self.locked_joints, self.urdf_dynamics
+        )
 
     def _rebuilt(self, links: Sequence[LinkInertial]) -> Robot:
         model = self.model.copy()
         for j in range(model.njoints):
             model.inertias[j] = _body_inertia(links, j)
-        return Robot(model, links, self.name, self.urdf_path, self.locked_joints)
+        return Robot(
+            model, links, self.name, self.urdf_path, self.locked_joints, self.urdf_dynamics
+        )
 
 
 def _body_inertia(links: Sequence[LinkInertial], joint_index: int) -> pin.Inertia:
@@ -339,7 +351,12 @@ def load_robot(
                 LinkInertial(frame.name, frame.parentJoint, frame.placement, urdf_links[frame.name])
             )
     name = entry.name if entry.origin != "file" else (model.name or entry.name)
-    robot = Robot(model, links, name, entry.urdf, locked)
+    # The URDF's <dynamics>: kept as nominal values for a box's joints: section, out of the
+    # dynamics otherwise (a rigid arm unless the box says what its drives are).
+    urdf_dynamics = np.array([model.damping, model.friction], dtype=float)
+    model.damping[:] = 0.0
+    model.friction[:] = 0.0
+    robot = Robot(model, links, name, entry.urdf, locked, urdf_dynamics)
     _check_bodies(robot)
     return robot
 

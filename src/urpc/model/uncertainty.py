@@ -157,7 +157,7 @@ def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) ->
         disturbance_bound=spec.disturbance,
         source=source,
         robot_name=robot.name,
-        joints=resolve_joint_box(spec.joints, robot, source),
+        joints=resolve_joint_box(spec.joints, robot, source) if spec.joints else None,
     )
 
 

@@ -160,12 +160,11 @@ def _profile_robot(robot_name: str, repeats: int) -> dict[str, float]:
         functions["solve"] = lambda: dposv(shifted, r, lower=0)
     joints = controller._joints
     if joints is not None:
-        scratch_lower, scratch_upper = lower.copy(), upper.copy()
+        scratch_lower, scratch_upper, torque = lower.copy(), upper.copy(), np.zeros(len(q))
 
         def joint_terms():
             # What output() adds for the drives: their nominal torque and their enclosure.
-            joints.nominal_torque(qd_a, qdd_a, armature=True)
-            bound.add_joint_terms(scratch_lower, scratch_upper, qd, qd_a, qdd_a)
+            bound.add_joint_terms(scratch_lower, scratch_upper, qd, qd_a, qdd_a, torque=torque)
 
         functions["joint_terms"] = joint_terms
     times = time_calls(functions, repeats)
