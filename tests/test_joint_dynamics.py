@@ -9,9 +9,11 @@ as the independent cross-check.
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
+from conftest import ROOT
 from scipy.integrate import solve_ivp
 
 import urpc
@@ -323,3 +325,18 @@ def test_the_controller_compensates_the_nominal_drive_along_the_reference(ur5, u
         )
         np.testing.assert_allclose(torque, expected, rtol=1e-14, atol=1e-15)
         np.testing.assert_array_equal((lower, upper), joints.enclose(qd, qd_a, qdd_a))
+
+
+def test_check_lists_the_drives_and_says_when_urdf_dynamics_are_unused(tmp_path, capsys):
+    from urpc.cli import main
+
+    box = str(ROOT / "robots" / "ur5" / "uncertainty_joint_friction.yaml")
+    assert main(["check", "ur5", "--uncertainty", box, "--json"]) == 0
+    drives = json.loads(capsys.readouterr().out)["drives"]
+    assert len(drives) == 18 and all(d["uncertain"] for d in drives)
+    assert {d["unit"] for d in drives} == {"kg m^2", "N m s/rad", "N m"}
+    rigid = tmp_path / "box.yaml"
+    rigid.write_text("links: {}\n")
+    assert main(["check", "z1", "--uncertainty", str(rigid)]) == 0
+    out = capsys.readouterr().out
+    assert "drives       none: rigid joints; the URDF's <dynamics> on joint1" in out

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 from ..errors import InputError
+from ..formats.uncertainty import JOINT_FIELDS
+from ..model.joint_dynamics import JOINT_UNITS
 from .common import (
     BOUND_METHODS,
     EXIT_OK,
@@ -161,7 +163,34 @@ def box_summary(robot, box) -> dict:
         "payloads": [{"name": p.name, "link": p.link} for p in box.payloads],
         "uncertain_parameters": box.n_uncertain,
         "links": links,
+        "drives": _drives(box),
+        "urdf_dynamics_joints": [
+            name
+            for name, column in zip(robot.joint_names, robot.urdf_dynamics.T, strict=True)
+            if column.any()
+        ],
     }
+
+
+def _drives(box) -> list[dict]:
+    """The joints' drive parameters of a box with a ``joints:`` section (empty: rigid joints)."""
+    joints = box.joints
+    if joints is None:
+        return []
+    return [
+        {
+            "joint": joints.joint_names[column],
+            "field": JOINT_FIELDS[row],
+            "unit": JOINT_UNITS[JOINT_FIELDS[row]],
+            "nominal": float(joints.nominal[row, column]),
+            "lower": float(joints.lower[row, column]),
+            "upper": float(joints.upper[row, column]),
+            "uncertain": bool(joints.uncertain[row, column]),
+        }
+        for column in range(joints.dof)
+        for row in range(3)
+        if joints.upper[row, column] > 0
+    ]
 
 
 def run_check(args) -> int:
@@ -206,7 +235,30 @@ def run_check(args) -> int:
         if exact:
             print(f"  exact: {', '.join(exact)}")
         print()
+    _print_drives(summary)
     return EXIT_OK
+
+
+def _print_drives(summary: dict) -> None:
+    drives = summary["drives"]
+    if not drives:
+        ignored = summary["urdf_dynamics_joints"]
+        note = (
+            f"; the URDF's <dynamics> on {', '.join(ignored)} are not used without a joints: "
+            "section (docs/joint-dynamics.md)"
+            if ignored
+            else ""
+        )
+        print(f"drives       none: rigid joints{note}")
+        return
+    print("drives (armature, damping, Coulomb friction; docs/joint-dynamics.md)")
+    print(f"  {'joint':<22} {'field':<9} {'nominal':>10} {'lower':>10} {'upper':>10}  unit")
+    for d in drives:
+        exact = "" if d["uncertain"] else "  (exact)"
+        print(
+            f"  {d['joint']:<22} {d['field']:<9} {d['nominal']:>10.4g} {d['lower']:>10.4g} "
+            f"{d['upper']:>10.4g}  {d['unit']}{exact}"
+        )
 
 
 def run_bound(args) -> int:
