@@ -11,7 +11,10 @@ with the armature ``Ia_i`` [kg m^2, or kg for a prismatic joint], the viscous co
 
 The robot carries them in its Pinocchio model (``model.armature``, ``model.damping``,
 ``model.friction``): Pinocchio's CRBA, RNEA and ABA add the armature to the joint-space inertia
-themselves; damping and friction are :func:`friction_torque`, which the plants subtract.
+themselves; damping and friction are :func:`friction_torque`, which the plants subtract. A
+loaded robot is rigid; an uncertainty box's ``joints:`` section (:func:`resolve_joint_box`) gives
+it its drives. The controller compensates the nominal drive along the reference velocity
+``qd_a`` (:meth:`JointBox.nominal_torque`; ``docs/joint-dynamics.md`` says why).
 
 **Stiction band.** The simulated plants cannot integrate the set-valued law exactly; the
 Pinocchio plant regularizes it as ``f_c,i = Fc_i sat(qd_i / v_s)`` with the stiction band
