@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 from ..errors import InputError
-from ..formats.uncertainty import JOINT_FIELDS
-from ..model.joint_dynamics import JOINT_UNITS
 from .common import (
     BOUND_METHODS,
     EXIT_OK,
@@ -174,6 +172,9 @@ def box_summary(robot, box) -> dict:
 
 def _drives(box) -> list[dict]:
     """The joints' drive parameters of a box with a ``joints:`` section (empty: rigid joints)."""
+    from ..formats.uncertainty import JOINT_FIELDS  # heavy (pydantic, numba): not at parse time
+    from ..model.joint_dynamics import JOINT_UNITS
+
     joints = box.joints
     if joints is None:
         return []
