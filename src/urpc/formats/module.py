@@ -12,7 +12,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from .base import FieldError, FileFormat
-from .uncertainty import LinkEntry, PhysicalPoint
+from .uncertainty import JointEntry, LinkEntry, PhysicalPoint
 from .values import Number, Positive, Text, Vector3
 
 ModuleKind = Literal["base", "actuator", "link", "tool", "payload"]
@@ -117,6 +117,12 @@ class ModuleFile(FileFormat):
     uncertainty: LinkEntry | None = Field(
         None, description="the module's box in the uncertainty format, module frame"
     )
+    drive: JointEntry | None = Field(
+        None,
+        description="the joint's drive (actuators only): armature [kg m^2], viscous damping "
+        "[N m s/rad] and Coulomb friction [N m], each an interval, with their nominal: values; "
+        "default nominal: the middle of an absolute interval, 0 for a field not given",
+    )
 
     @model_validator(mode="after")
     def _fits_kind(self) -> ModuleFile:
@@ -127,6 +133,12 @@ class ModuleFile(FileFormat):
                 raise FieldError(key, f"{a_kind} module needs '{key}' ({why})")
             if not needed(kind) and getattr(self, key) is not None:
                 raise FieldError(key, f"{a_kind} module has no '{key}' ({why})")
+        if self.drive is not None and self.joint is None:
+            raise FieldError(
+                "drive",
+                f"{a_kind} module has no joint, so it has no drive (armature, damping, "
+                "friction belong to an actuator's joint); remove 'drive'",
+            )
         if kind == "base" and self.uncertainty is not None and self.uncertainty.entries():
             raise FieldError(
                 "uncertainty",

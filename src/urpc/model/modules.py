@@ -7,7 +7,8 @@ documents every field). Kinds:
 
 * ``base``: the root, fixed to the world; one output flange (``distal``).
 * ``actuator``: a revolute joint and the housing it turns; the joint sits at the module frame and
-  turns about ``joint.axis`` (module frame); input (``proximal``) and output (``distal``) flanges.
+  turns about ``joint.axis`` (module frame); input (``proximal``) and output (``distal``) flanges;
+  optionally its ``drive:`` (armature, damping, friction: :mod:`urpc.model.drives`).
 * ``link``, ``tool``: rigid parts joined by fixed joints; a tool's output frame is its TCP.
 * ``payload``: a held object; it is not put in the URDF but becomes the uncertainty file's
   ``payload:`` entry, fixed to the TCP, so that changing the payload changes only the box.
@@ -31,6 +32,7 @@ from ..formats import module as schema
 from ..formats.base import read_yaml, validate
 from ..formats.uncertainty import LinkEntry
 from .catalog import builtin_root
+from .drives import Drive, resolve_drive
 from .inertia import inertia_problem
 from .parameter_box import PHYSICAL_FIELDS, LinkBox, inertia_from_physical
 from .uncertainty import resolve_link_box
@@ -120,6 +122,8 @@ class Module:
         uncertainty: The module's box, an entry in the uncertainty format (module frame).
         box: That box, resolved against :attr:`inertial` (``None`` for a base).
         shape: Geometry for drawings, or ``None``.
+        drive: The joint's drive (armature, damping, friction with their intervals), or
+            ``None``: a rigid joint (an actuator without ``drive:``, or another kind).
     """
 
     name: str
@@ -133,6 +137,7 @@ class Module:
     uncertainty: Mapping[str, Any]
     box: LinkBox | None
     shape: Shape | None
+    drive: Drive | None = None
 
     @property
     def inertia(self) -> pin.Inertia:
@@ -216,7 +221,8 @@ def read_module(path: str | Path) -> Module:
 
     Raises:
         InputError: naming the file and the field, for an unknown key or kind, a missing or
-            superfluous connection frame or joint, a non-physical inertia, an invalid box.
+            superfluous connection frame or joint, a non-physical inertia, an invalid box, a
+            drive on a module without a joint or with an invalid interval.
     """
     path = Path(path)
     source = str(path)
@@ -256,6 +262,7 @@ def read_module(path: str | Path) -> Module:
         uncertainty=document.get("uncertainty") or {},
         box=box,
         shape=_shape(spec.shape),
+        drive=None if spec.drive is None else resolve_drive(spec.drive, source),
     )
 
 
