@@ -46,7 +46,7 @@ def compose_urdf(chain: Sequence[Module], name: str) -> tuple[Any, tuple[Part, .
     """The yourdfpy URDF of a validated chain of modules, and where each module went.
 
     The link of module ``i`` is ``m<i>_<module>`` (its frame is the module frame), revolute
-    joints are ``joint1 .. jointN``, a massless :data:`TCP_LINK` marks the output frame of the last
+    joints are ``joint1 .. jointN`` (with ``<dynamics>`` from an actuator's drive), a massless :data:`TCP_LINK` marks the output frame of the last
     body, and a payload module is left out of the URDF (:data:`PAYLOAD_NAME` in the box).
     """
     import yourdfpy
@@ -78,6 +78,7 @@ def compose_urdf(chain: Sequence[Module], name: str) -> tuple[Any, tuple[Part, .
                         child=link,
                         origin=origin,
                         axis=np.array(spec.axis),
+                        dynamics=_dynamics(module),
                         limit=yourdfpy.Limit(
                             effort=spec.effort,
                             velocity=spec.velocity,
@@ -108,6 +109,15 @@ def compose_urdf(chain: Sequence[Module], name: str) -> tuple[Any, tuple[Part, .
     robot = yourdfpy.Robot(name=name, links=links, joints=joints)
     urdf = yourdfpy.URDF(robot=robot, build_scene_graph=False, load_meshes=False)
     return urdf, tuple(parts)
+
+
+def _dynamics(module: Module) -> Any:
+    """``<dynamics damping friction>`` of an actuator's joint: its drive's nominal viscous
+    damping [N m s/rad] and Coulomb friction [N m] (none without a drive)."""
+    import yourdfpy
+
+    drive = module.drive
+    return None if drive is None else yourdfpy.Dynamics(drive.damping, drive.friction)
 
 
 def _inertial(module: Module) -> Any:

@@ -2,9 +2,11 @@
 
 The modules and their files are described in :mod:`urpc.model.modules`. :func:`assemble` checks
 the chain (a base first, matching flange connector types, at least one actuator, a payload last),
-writes the URDF (:mod:`urpc.model.assembly_urdf`) and the combined uncertainty file: each moving
-module's box applies unchanged to its link ``m<i>_<module>``, whose frame is the module frame, and
-a payload module becomes the ``payload:`` entry on the ``tcp`` link. Assembly files (schema
+writes the URDF (:mod:`urpc.model.assembly_urdf`) and the combined uncertainty file
+(:mod:`urpc.model.assembly_box`): each moving module's box applies unchanged to its link
+``m<i>_<module>``, whose frame is the module frame, a payload module becomes the ``payload:`` entry
+on the ``tcp`` link, and an actuator's drive the ``joints:`` entry of its joint (and the URDF
+joint's ``<dynamics>``). Assembly files (schema
 :class:`urpc.formats.assembly.AssemblyFile`) name the modules in order.
 """
 
@@ -22,13 +24,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 import yaml
 
 from ..errors import InputError, did_you_mean
 from ..formats.assembly import AssemblyFile
 from ..formats.base import read_yaml, validate
-from .assembly_urdf import PAYLOAD_NAME, SNAP, TCP_LINK, Part, compose_urdf, snapped
+from .assembly_box import uncertainty_document
+from .assembly_urdf import PAYLOAD_NAME, TCP_LINK, Part, compose_urdf
 from .catalog import builtin_root
 from .modules import (
     KINDS,
@@ -42,7 +44,7 @@ from .modules import (
     load_module_library,
     read_module,
 )
-from .parameter_box import PHYSICAL_FIELDS, ParameterBox
+from .parameter_box import ParameterBox
 from .robot import Robot, load_robot
 from .uncertainty import parse_uncertainty
 
@@ -90,10 +92,17 @@ class Assembly:
 
         The box is :attr:`uncertainty` validated by :func:`urpc.model.uncertainty.parse_uncertainty`,
         the same as ``load_uncertainty(uncertainty_path, robot)`` without parsing the YAML text
-        back (8 ms of the pure-Python YAML reader saved per assembly).
+        back (8 ms of the pure-Python YAML reader saved per assembly). The robot carries the
+        drives' nominal joint parameters (``Robot.joint_parameters``): damping and friction from
+        the URDF's ``<dynamics>``, the armature, which a URDF cannot hold, from the box.
         """
         robot = load_robot(self.urdf_path)
-        return robot, parse_uncertainty(self.uncertainty, robot, source=str(self.uncertainty_path))
+        box = parse_uncertainty(self.uncertainty, robot, source=str(self.uncertainty_path))
+        if box.joints is not None and not np.array_equal(
+            robot.joint_parameters, box.joints.nominal
+        ):
+            robot = robot.with_joint_parameters(box.joints.nominal)
+        return robot, box
 
 
 def assemble(
@@ -188,7 +197,7 @@ def _assemble(
         )
     chain = _validated_chain(names, library, source)
     urdf, parts = compose_urdf(chain, name)
-    document = _uncertainty_document(chain, parts, name, disturbance, description)
+    document = uncertainty_document(chain, parts, name, disturbance, description)
 
     folder = Path(out_dir) if out_dir is not None else _temporary_folder()
     folder.mkdir(parents=True, exist_ok=True)
@@ -281,83 +290,6 @@ def _validated_chain(names: Any, library: ModuleLibrary, source: str | None) -> 
             "modules",
         )
     return chain
-
-
-def _uncertainty_document(
-    chain: Sequence[Module],
-    parts: Sequence[Part],
-    name: str,
-    disturbance: float | None,
-    description: str | None,
-) -> dict[str, Any]:
-    document: dict[str, Any] = {
-        "robot": name,
-        "description": description or "assembly of " + ", ".join(m.name for m in chain),
-        "disturbance": "unknown" if disturbance is None else float(disturbance),
-        "links": {},
-    }
-    moving = False  # modules before the first actuator are fixed to the world: not in the box
-    for module, part in zip(chain, parts, strict=True):
-        moving = moving or module.kind == "actuator"
-        if module.kind == "payload":
-            document["payload"] = _payload_entry(module)
-        elif moving and module.uncertainty:
-            document["links"][part.link] = _plain(module.uncertainty)
-    return document
-
-
-def _payload_entry(module: Module) -> dict[str, Any]:
-    """The ``payload:`` entry of a payload module: its box mapped into the TCP frame.
-
-    The payload frame sits at ``P^-1`` in the TCP frame (``P`` its input frame). With ``R, t``
-    that pose, ``c_tcp = R c + t`` and ``I_tcp = R I R^T``: every physical coordinate is an affine
-    function of the module's, and the box is mapped entry by entry (exact when ``R`` is a signed
-    permutation, the interval hull otherwise).
-    """
-    pose = module.proximal.placement.inverse()
-    linear, offset = _physical_map(pose)
-    box = module.box
-    positive, negative = np.maximum(linear, 0.0), np.minimum(linear, 0.0)
-    lower = positive @ box.lower + negative @ box.upper + offset
-    upper = positive @ box.upper + negative @ box.lower + offset
-    nominal = linear @ box.nominal + offset
-    entry: dict[str, Any] = {"name": PAYLOAD_NAME, "link": TCP_LINK}
-    for k, key in enumerate(PHYSICAL_FIELDS):
-        if upper[k] > lower[k]:
-            entry[key] = [float(lower[k]), float(upper[k])]
-        elif nominal[k] != 0.0:
-            entry[key] = float(nominal[k])
-    entry["nominal"] = {key: float(nominal[k]) for k, key in enumerate(PHYSICAL_FIELDS)}
-    return entry
-
-
-def _physical_map(pose: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
-    """``(L, b)`` with ``p' = L p + b`` the physical coordinates of a body moved by ``pose``."""
-    R = snapped(pose.rotation)
-    linear = np.zeros((10, 10))
-    linear[0, 0] = 1.0
-    linear[1:4, 1:4] = R
-    # Inertia components in PHYSICAL_FIELDS order (xx, xy, yy, xz, yz, zz) as matrix entries.
-    entries = ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))
-    for j, (a, b) in enumerate(entries):
-        unit = np.zeros((3, 3))
-        unit[a, b] = unit[b, a] = 1.0
-        rotated = R @ unit @ R.T
-        linear[4:, 4 + j] = [rotated[r, c] for r, c in entries]
-    offset = np.zeros(10)
-    offset[1:4] = np.where(np.abs(pose.translation) < SNAP, 0.0, pose.translation)
-    return snapped(linear), offset
-
-
-def _plain(value: Any) -> Any:
-    """A copy made of plain dicts, lists, strings and floats (for the YAML writer)."""
-    if isinstance(value, Mapping):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
 
 
 # ---------------------------------------------------------------------------- files
