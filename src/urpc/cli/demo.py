@@ -160,10 +160,31 @@ def run_reconfigure(args) -> int:
             f"  {entry['name']:<18} {entry['dof']:>3} {1e3 * entry['synthesis_time']:>14.1f} "
             f"{'yes' if entry['met'] else 'NO':>5} {entry_time:>9} {final:>17} {wall:>8}"
         )
+    _print_drives(summary["configurations"])
     print(f"figure  {summary['figure']}")
     if summary["replay"]:
         print(f"replay  {summary['replay']}")
     return EXIT_OK
+
+
+def _print_drives(configurations) -> None:
+    """One line per configuration with drives: each joint's nominal armature, damping and
+    friction (the true plant's are drawn from the intervals in the JSON output)."""
+    lines = []
+    for entry in configurations:
+        drives = entry.get("drives") or {}
+        values = []
+        for joint, drive in drives.items():
+            nominal = [v["nominal"] for k, v in drive.items() if k != "module"]
+            values.append(f"{joint} " + "/".join(f"{x:g}" for x in nominal))
+        if values:
+            lines.append(f"  {entry['name']:<18} {', '.join(values)}")
+    if lines:
+        print(
+            "drives, nominal armature [kg m^2] / damping [N m s/rad] / friction [N m], each "
+            "uncertain (true plants drawn from the intervals):"
+        )
+        print("\n".join(lines))
 
 
 def run_tool_change(args) -> int:

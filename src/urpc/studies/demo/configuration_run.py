@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError, SimulationError
+from ...model.parameter_box import JOINTS, link_points
 from ...model.robot import Robot
 from ...sim.results import SimulationResult
 from ...sim.simulation import simulate
@@ -34,7 +35,8 @@ class ConfigurationRun:
     Attributes:
         arm: The synthesized configuration (assembly, models, controller, timing).
         plant: The true plant (a seeded, physically consistent draw from the box).
-        true_point: The drawn parameters (link or payload -> coordinates of its box).
+        true_point: The drawn parameters (link or payload -> coordinates of its box, and
+            :data:`urpc.model.parameter_box.JOINTS` -> the drawn ``(3, dof)`` drives).
         trajectory: The desired trajectory (:func:`urpc.sim.trajectories.generic_trajectory`).
         result: The simulation, or ``None`` when it diverged.
         failure: Why the simulation stopped, when it diverged.
@@ -52,7 +54,8 @@ class ConfigurationRun:
         return self.arm.name
 
     def summary(self) -> dict[str, Any]:
-        """JSON-ready: name, modules, dof, synthesis_time [s] and its parts, met, the metrics."""
+        """JSON-ready: name, modules, dof, synthesis_time [s] and its parts, met, the metrics, the
+        drives of the joints (nominal and interval) and the drawn true parameters."""
         timing = self.arm.timing
         summary: dict[str, Any] = {
             "name": self.arm.name,
@@ -72,7 +75,8 @@ class ConfigurationRun:
             summary["met"] = metrics["met"]
             summary.update({k: v for k, v in metrics.items() if k != "met"})
             summary["diverged"] = False
-        summary["true_parameters"] = describe_point(self.true_point)
+        summary["drives"] = self.arm.drives
+        summary["true_parameters"] = describe_point(self.true_point, self.arm.robot.joint_names)
         summary["urdf"] = str(self.arm.assembly.urdf_path)
         return summary
 
@@ -124,7 +128,7 @@ def run_configuration(
             seed=seed,
             epsilon=epsilon,
             scenario=arm.name,
-            plant_description=f"{arm.name}: {describe_point(point)}",
+            plant_description=f"{arm.name}: {describe_point(point, arm.robot.joint_names)}",
             progress=progress,
         )
     except SimulationError as exc:
@@ -147,8 +151,19 @@ def initial_position(
         ) from None
 
 
-def describe_point(point: Mapping[str, np.ndarray]) -> str:
-    return "; ".join(
+def describe_point(point: Mapping[str, np.ndarray], joint_names: Sequence[str] = ()) -> str:
+    """One line: each body's drawn coordinates, then each joint's drawn drive (armature
+    [kg m^2], damping [N m s/rad], friction [N m]) when the point has :data:`JOINTS`."""
+    parts = [
         f"{name}: " + ", ".join(f"{value:.6g}" for value in np.ravel(values))
-        for name, values in point.items()
-    )
+        for name, values in link_points(point).items()
+    ]
+    if JOINTS in point:
+        values = np.asarray(point[JOINTS], dtype=float)
+        names = list(joint_names) or [f"joint {k + 1}" for k in range(values.shape[-1])]
+        parts += [
+            f"{name} drive: armature {a:.6g} kg m^2, damping {d:.6g} N m s/rad, "
+            f"friction {f:.6g} N m"
+            for name, (a, d, f) in zip(names, values.reshape(3, -1).T, strict=True)
+        ]
+    return "; ".join(parts)

@@ -16,7 +16,8 @@ EPSILON = 1e-2
 #: Control period [s] (1 kHz, zero-order hold).
 SAMPLE_PERIOD = 1e-3
 #: Radius [N m] of the ball the input disturbance is drawn from at every sample, unknown to the
-#: controller: of the order of unmodelled joint friction of harmonic-drive joints of this size.
+#: controller: of the order of the friction of harmonic-drive joints of this size, on top of the
+#: drives' own Coulomb friction and damping (in the box and drawn in the plant).
 DISTURBANCE_BOUND = 2.0
 #: Simulated time of one configuration [s].
 DURATION = 8.0

@@ -10,6 +10,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from ...control.base import Controller
 from ...control.synthesis import synthesize
@@ -70,6 +71,17 @@ class SynthesizedArm:
     @property
     def dof(self) -> int:
         return self.robot.dof
+
+    @property
+    def drives(self) -> dict[str, dict[str, Any]]:
+        """JSON-ready, per joint with a drive: its module and the drive's armature [kg m^2],
+        damping [N m s/rad] and friction [N m], each a nominal and an interval."""
+        library = self.assembly.library
+        return {
+            part.joint: {"module": part.module, **library[part.module].drive.describe()}
+            for part in self.assembly.parts
+            if part.kind == "actuator" and library[part.module].drive is not None
+        }
 
 
 def synthesize_configuration(

@@ -15,6 +15,7 @@ import numpy as np
 
 from ...control.base import Reference
 from ...errors import InputError
+from ...model.parameter_box import JOINTS
 from ...model.uncertainty import ParameterBox
 from ...sim.results import SimulationResult
 from ...sim.simulation import simulate
@@ -104,6 +105,7 @@ class ToolChangeRun:
         return {
             "before": {"name": self.before.name, "modules": list(self.before.modules)},
             "after": {"name": self.after.name, "modules": list(self.after.modules)},
+            "drives": self.before.drives,
             "dof": self.before.dof,
             "t_change": self.t_change,
             "switch_delay": self.switch_delay,
@@ -149,12 +151,12 @@ def tool_change_run(
 
     Both configurations are synthesized with the same default settings. The true plant after the
     change keeps the arm's drawn parameters (every body whose box is the same in both
-    configurations) and draws the rest (the new payload) from the new box. At
-    ``t_change + switch_delay`` the controller switches to the new configuration's controller (the
-    new nominal model and bound, the same gains) without a restart: each segment starts from the
-    previous one's last plant state ``(q, qd)`` and controller state (``controller_state0``: the
-    integral behind ``phi`` and ``kappa`` is not reset), on the same trajectory shifted by the
-    time already run, so the reference is continuous. The disturbance keeps being drawn (segment
+    configurations, the joints' drives included) and draws the rest (the new payload) from the
+    new box. At ``t_change + switch_delay`` the controller switches to the new configuration's
+    controller (the new nominal model and bound, the same gains) without a restart: each segment
+    starts from the previous one's last plant state ``(q, qd)`` and controller state
+    (``controller_state0``: the integral behind ``phi`` and ``kappa`` is not reset), on the same
+    trajectory shifted by the time already run, so the reference is continuous. The disturbance keeps being drawn (segment
     ``k`` seeds its generator with ``seed + k``).
 
     Args:
@@ -201,14 +203,15 @@ def tool_change_run(
         )
     point_before = sample_true_parameters(first.box, seed)
     point_after = sample_true_parameters(second.box, seed + 1)
-    for link, values in point_before.items():  # the arm itself does not change
+    for link, values in point_before.items():  # the arm and its drives do not change
         if _same_box(first.box, second.box, link):
             point_after[link] = values
     plant_before = first.box.plant(first.robot, point_before)
     plant_after = second.box.plant(second.robot, point_after)
+    joint_names = first.robot.joint_names
     described = {
-        id(plant_before): f"{first.name}: {describe_point(point_before)}",
-        id(plant_after): f"{second.name}: {describe_point(point_after)}",
+        id(plant_before): f"{first.name}: {describe_point(point_before, joint_names)}",
+        id(plant_after): f"{second.name}: {describe_point(point_after, joint_names)}",
     }
     plan = [(plant_before, first.controller, t_change)]
     if switch_delay > 0:
@@ -290,6 +293,17 @@ def concatenate(segments: Sequence[SimulationResult], offsets: Sequence[float]) 
 
 
 def _same_box(a: ParameterBox, b: ParameterBox, link: str) -> bool:
+    """Whether a body (or, for :data:`JOINTS`, the joints' drives) has the same box in both."""
+    if link == JOINTS:
+        x, y = a.joints, b.joints
+        return (
+            x is not None
+            and y is not None
+            and x.joint_names == y.joint_names
+            and all(
+                np.array_equal(getattr(x, k), getattr(y, k)) for k in ("nominal", "lower", "upper")
+            )
+        )
     try:
         x, y = a.link_box(link), b.link_box(link)
     except KeyError:
