@@ -183,6 +183,9 @@ def test_payload_is_the_box_payload_at_the_tcp(tmp_path):
     assert [(p.name, p.link) for p in box.payloads] == [("payload", "tcp")]
     assert "payload" not in robot.link_names  # the URDF holds no payload
     by_hand = pin.buildModelFromXML(hand_written_urdf(chain[:-1], payload="payload_1kg"))
+    # The nominal model carries the drives' armature, which a URDF cannot hold.
+    actuators = [name for name in chain if module_doc(name)["kind"] == "actuator"]
+    by_hand.armature = np.array([module_doc(n)["drive"]["nominal"]["armature"] for n in actuators])
     assert_same_dynamics(box.nominal_robot(robot).model, by_hand)
     doc = module_doc("payload_1kg")
     payload_box = box.link_box("payload")
