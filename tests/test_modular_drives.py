@@ -136,21 +136,19 @@ def test_the_assembled_robot_and_box_carry_the_drives(tmp_path):
     expected = np.stack(
         [expected_drive(m) for m in ("actuator_large", "elbow_large", "elbow_small")], axis=-1
     )  # (nominal/lower/upper, field, joint)
-    np.testing.assert_allclose(robot.joint_parameters, expected[0], rtol=1e-15)
+    # A loaded robot is rigid; the box's joints: section gives the nominal model its drives.
+    np.testing.assert_array_equal(robot.joint_parameters, 0.0)
+    np.testing.assert_allclose(box.nominal_robot(robot).joint_parameters, expected[0], rtol=1e-15)
     assert box.joints.joint_names == robot.joint_names == ("joint1", "joint2", "joint3")
     np.testing.assert_allclose(box.joints.nominal, expected[0], rtol=1e-15)
     np.testing.assert_allclose(box.joints.lower, expected[1], rtol=1e-15)
     np.testing.assert_allclose(box.joints.upper, expected[2], rtol=1e-15)
-    # The URDF carries damping and friction (Pinocchio reads them), not the armature.
-    from_urdf = load_robot(assembly.urdf_path).joint_parameters
-    np.testing.assert_array_equal(from_urdf[1:], expected[0][1:])
-    np.testing.assert_array_equal(from_urdf[0], 0.0)
+    # The URDF carries the nominal damping and friction as <dynamics> (no armature).
+    np.testing.assert_array_equal(robot.urdf_dynamics, expected[0][1:])
     # The written uncertainty file holds the same joint box.
     written = load_uncertainty(assembly.uncertainty_path, load_robot(assembly.urdf_path)).joints
     for name in ("nominal", "lower", "upper"):
         np.testing.assert_array_equal(getattr(written, name), getattr(box.joints, name))
-    # The controller's nominal model is the robot itself (no payload aside).
-    np.testing.assert_array_equal(box.nominal_robot(robot).joint_parameters, expected[0])
 
 
 def test_an_actuator_without_a_drive_is_a_rigid_joint(tmp_path):
@@ -160,7 +158,7 @@ def test_an_actuator_without_a_drive_is_a_rigid_joint(tmp_path):
     assembly = assemble(chain, library=folder, out_dir=tmp_path)
     robot, box = assembly.load()
     assert list(assembly.uncertainty["joints"]) == ["joint1"]
-    np.testing.assert_array_equal(robot.joint_parameters[:, 1], 0.0)
+    np.testing.assert_array_equal(box.nominal_robot(robot).joint_parameters[:, 1], 0.0)
     assert not box.joints.uncertain[:, 1].any()
     assert box.joints.uncertain[:, 0].all()
 
@@ -204,5 +202,5 @@ def test_assemblies_without_drives_still_load(tmp_path):
     assembly = load_assembly("arm_3dof", library=folder, out_dir=tmp_path)
     robot, box = assembly.load()
     assert "joints" not in assembly.uncertainty
-    np.testing.assert_array_equal(robot.joint_parameters, 0.0)
-    assert not box.joints.active
+    np.testing.assert_array_equal(box.nominal_robot(robot).joint_parameters, 0.0)
+    assert box.joints is None or not box.joints.active

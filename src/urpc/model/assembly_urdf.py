@@ -113,7 +113,8 @@ def compose_urdf(chain: Sequence[Module], name: str) -> tuple[Any, tuple[Part, .
 
 def _dynamics(module: Module) -> Any:
     """``<dynamics damping friction>`` of an actuator's joint: its drive's nominal viscous
-    damping [N m s/rad] and Coulomb friction [N m] (none without a drive)."""
+    damping [N m s/rad] and Coulomb friction [N m] (none without a drive); ``Robot.urdf_dynamics``
+    of the loaded assembly, the box's ``joints:`` entry being what enters the dynamics."""
     import yourdfpy
 
     drive = module.drive

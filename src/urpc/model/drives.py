@@ -6,8 +6,9 @@ values from, so a field's nominal is its ``nominal:`` value, else the middle of 
 (which must then be absolute), and a field given neither is 0 (no such term). When modules are
 assembled, each drive becomes the ``joints:`` entry of its joint (:func:`drive_entry`: absolute
 intervals and every nominal written out, so the box read back is the module's) and the URDF
-joint's ``<dynamics damping friction>`` (the nominal, which Pinocchio reads; the URDF has no
-armature, so :meth:`urpc.model.modular.Assembly.load` sets it on the robot).
+joint's ``<dynamics damping friction>`` (the nominal, for other readers of the URDF such as
+MuJoCo; a URDF has no armature). As for any robot, the loaded assembly is rigid and its box's
+``joints:`` section puts the drives into the nominal model and the plants.
 """
 
 from __future__ import annotations

@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import yaml
 
 from ..errors import InputError, did_you_mean
@@ -92,17 +91,13 @@ class Assembly:
 
         The box is :attr:`uncertainty` validated by :func:`urpc.model.uncertainty.parse_uncertainty`,
         the same as ``load_uncertainty(uncertainty_path, robot)`` without parsing the YAML text
-        back (8 ms of the pure-Python YAML reader saved per assembly). The robot carries the
-        drives' nominal joint parameters (``Robot.joint_parameters``): damping and friction from
-        the URDF's ``<dynamics>``, the armature, which a URDF cannot hold, from the box.
+        back (8 ms of the pure-Python YAML reader saved per assembly). As every loaded robot,
+        the robot is rigid; the box's ``joints:`` section carries the drives, and
+        ``box.nominal_robot(robot)`` (the controller's model) and ``box.plant(robot, point)``
+        have them.
         """
         robot = load_robot(self.urdf_path)
-        box = parse_uncertainty(self.uncertainty, robot, source=str(self.uncertainty_path))
-        if box.joints is not None and not np.array_equal(
-            robot.joint_parameters, box.joints.nominal
-        ):
-            robot = robot.with_joint_parameters(box.joints.nominal)
-        return robot, box
+        return robot, parse_uncertainty(self.uncertainty, robot, source=str(self.uncertainty_path))
 
 
 def assemble(
