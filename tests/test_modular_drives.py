@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from test_modular import ACTUATOR as PLAIN_ACTUATOR
 
 from urpc.errors import InputError
 from urpc.model.modular import assemble, load_assembly, load_module_library
@@ -26,19 +27,15 @@ MODULES = ROOT / "robots" / "modules"
 ARM = ["base", "actuator_large", "elbow_large", "link_500", "elbow_small", "link_300"]
 FIELDS = ("armature", "damping", "friction")
 
-ACTUATOR = """
-kind: actuator
-inertial: {mass: 1.0, ixx: 0.001, iyy: 0.001, izz: 0.001}
-joint: {axis: [0, 0, 1], lower: -1, upper: 1, effort: 10, velocity: 1}
-proximal: {connector: M}
-distal: {connector: M, xyz: [0, 0, 0.1]}
-uncertainty: {mass: 5%}
-drive:
+ACTUATOR = (
+    PLAIN_ACTUATOR
+    + """drive:
   armature: 30%
   damping: [0.5, 2]
   friction: [1, 3]
   nominal: {armature: 0.2, friction: 2.5}
 """
+)
 LINK = """
 kind: link
 inertial: {mass: 0.5, com_z: 0.05, ixx: 0.0005, iyy: 0.0005, izz: 0.0001}
@@ -152,8 +149,7 @@ def test_the_assembled_robot_and_box_carry_the_drives(tmp_path):
 
 
 def test_an_actuator_without_a_drive_is_a_rigid_joint(tmp_path):
-    plain = ACTUATOR.split("drive:")[0]
-    folder = library_with(tmp_path, plain=plain)
+    folder = library_with(tmp_path, plain=PLAIN_ACTUATOR)
     chain = ["base", "actuator_large", "link_500", "plain", "link_300"]
     assembly = assemble(chain, library=folder, out_dir=tmp_path)
     robot, box = assembly.load()
