@@ -15,7 +15,7 @@ import math
 from pathlib import Path
 
 from urpc.control.certificate import certify
-from urpc.sim.trajectories import generic_trajectory
+from urpc.trajectories import generic_trajectory
 from urpc.studies.certification import certify_setup
 from urpc.studies.demo.settings import DEFAULT_CONFIGURATIONS, DISTURBANCE_BOUND, DURATION
 from urpc.studies.demo.synthesis import synthesize_configuration

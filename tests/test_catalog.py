@@ -49,7 +49,7 @@ def test_readme_api_example_runs_from_any_folder(tmp_path):
     code = """
 import numpy as np
 import urpc
-from urpc.sim.trajectories import PaperTrajectory
+from urpc.trajectories import PaperTrajectory
 
 robot = urpc.load_robot("rr_planar")
 box = urpc.load_uncertainty("rr_planar", robot)

@@ -12,7 +12,7 @@ import pytest
 
 import urpc
 from urpc.control.certificate import certify
-from urpc.sim.trajectories import PaperTrajectory
+from urpc.trajectories import PaperTrajectory
 
 DURATION = 3.0
 
@@ -99,7 +99,7 @@ def test_certificate_json_has_the_documented_fields(rr, rr_box):
 def test_the_floor_bounds_sampled_ur5_plants_once_the_gains_saturate(ur5):
     """Another arm, another box (the shipped UR5 box: payload 0-3 kg, wrist masses), plants
     drawn at vertices and inside, a generic reference; saturated gains as above."""
-    from urpc.sim.trajectories import generic_trajectory
+    from urpc.trajectories import generic_trajectory
 
     box = urpc.load_uncertainty("ur5", ur5)
     period = 2e-4
@@ -129,7 +129,7 @@ SLIDER = """<robot name="slider"><link name="base"/>
 
 def test_a_one_joint_robot_is_certified_and_runs(tmp_path):
     """One joint: Pinocchio hands back the regressor's single row as a vector."""
-    from urpc.sim.trajectories import generic_trajectory
+    from urpc.trajectories import generic_trajectory
 
     (tmp_path / "slider.urdf").write_text(SLIDER)
     robot = urpc.load_robot(tmp_path / "slider.urdf")

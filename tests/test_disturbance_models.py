@@ -20,7 +20,7 @@ from urpc.control.synthesis import synthesize
 from urpc.errors import InputError
 from urpc.sim.sampled import against_r
 from urpc.sim.simulation import simulate
-from urpc.sim.trajectories import PaperTrajectory
+from urpc.trajectories import PaperTrajectory
 
 TRUE = dict(m2=10.0, lc2=0.525, I2=20 / 12)
 

@@ -85,7 +85,7 @@ def test_declared_names_match_the_registries():
     from urpc.bounds import METHODS
     from urpc.control.synthesis import SAMPLED_LAWS, synthesize
     from urpc.sim.plants import PLANTS
-    from urpc.sim.trajectories import TRAJECTORY_KINDS
+    from urpc.trajectories import TRAJECTORY_KINDS
 
     assert set(get_args(scenario_format.BoundMethodName)) == set(METHODS)
     assert get_args(scenario_format.PlantBackend) == tuple(PLANTS)

@@ -31,7 +31,7 @@ TRUE = dict(m2=10.0, lc2=0.525, I2=20 / 12)
 
 class PaperTrajectory:
     """``q_d(t) = (pi/4, -pi/8) sin(pi t/2) sin(pi t)`` with analytic derivatives (local to the
-    tests, independent of ``urpc.sim.trajectories``)."""
+    tests, independent of ``urpc.trajectories``)."""
 
     amplitude = np.array([np.pi / 4, -np.pi / 8])
 

@@ -11,7 +11,7 @@ from urpc.control.base import Controller
 from urpc.errors import InputError, SimulationError
 from urpc.expressions import ExpressionOverflow, evaluate
 from urpc.sim.simulation import simulate
-from urpc.sim.trajectories import PaperTrajectory
+from urpc.trajectories import PaperTrajectory
 
 VECTORS = ("q", "qd", "qd_a", "qdd_a")
 

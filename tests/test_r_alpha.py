@@ -23,7 +23,7 @@ from urpc.control.r_alpha import (
     synthesize_r_alpha,
 )
 from urpc.errors import InputError
-from urpc.sim.trajectories import PaperTrajectory
+from urpc.trajectories import PaperTrajectory
 
 GOLDEN = (1 + np.sqrt(5)) / 2
 

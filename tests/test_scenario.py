@@ -13,7 +13,7 @@ from conftest import RR_DIR
 from urpc.control.computed_torque import ComputedTorqueController
 from urpc.control.r_alpha import PAPER_BETAS, RAlphaController
 from urpc.errors import InputError
-from urpc.sim.trajectories import PaperTrajectory, QuinticTrajectory, SinusoidTrajectory
+from urpc.trajectories import PaperTrajectory, QuinticTrajectory, SinusoidTrajectory
 from urpc.studies.scenario import (
     CONTROLLERS,
     PLANT_BACKENDS,

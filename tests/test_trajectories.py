@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from urpc.errors import InputError
-from urpc.sim.trajectories import (
+from urpc.trajectories import (
     PaperTrajectory,
     QuinticTrajectory,
     SinusoidTrajectory,

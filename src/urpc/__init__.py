@@ -44,7 +44,13 @@ _LAZY = {
     "METRIC_NAMES": (".sim.metrics", "METRIC_NAMES"),
     "SimulationResult": (".sim.results", "SimulationResult"),
     "simulate": (".sim.simulation", "simulate"),
-    "PaperTrajectory": (".sim.trajectories", "PaperTrajectory"),
+    "PaperTrajectory": (".trajectories", "PaperTrajectory"),
+    "QuinticTrajectory": (".trajectories", "QuinticTrajectory"),
+    "Reference": (".trajectories", "Reference"),
+    "SinusoidTrajectory": (".trajectories", "SinusoidTrajectory"),
+    "Trajectory": (".trajectories", "Trajectory"),
+    "generic_trajectory": (".trajectories", "generic_trajectory"),
+    "home_configuration": (".trajectories", "home_configuration"),
     "load_scenario": (".studies.scenario", "load_scenario"),
 }
 
@@ -69,6 +75,12 @@ __all__ = [
     "IntervalPassivityController",
     "METRIC_NAMES",
     "PaperTrajectory",
+    "QuinticTrajectory",
+    "Reference",
+    "SinusoidTrajectory",
+    "Trajectory",
+    "generic_trajectory",
+    "home_configuration",
     "SimulationResult",
     "simulate",
     "synthesize",
@@ -111,5 +123,13 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
     from .sim.metrics import METRIC_NAMES
     from .sim.results import SimulationResult
     from .sim.simulation import simulate
-    from .sim.trajectories import PaperTrajectory
+    from .trajectories import (
+        PaperTrajectory,
+        QuinticTrajectory,
+        Reference,
+        SinusoidTrajectory,
+        Trajectory,
+        generic_trajectory,
+        home_configuration,
+    )
     from .studies.scenario import load_scenario

@@ -9,20 +9,13 @@ simulator advances it once per sample period with :meth:`Controller.advance`).
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
+from ..trajectories import Reference
 
-@dataclass(frozen=True)
-class Reference:
-    """Desired joint trajectory at one instant: position [rad], velocity [rad/s], acceleration
-    [rad/s^2] (metres for prismatic joints), each of length ``dof``."""
-
-    q: np.ndarray
-    qd: np.ndarray
-    qdd: np.ndarray
+__all__ = ["Controller", "Reference"]
 
 
 class Controller(ABC):

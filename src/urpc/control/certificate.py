@@ -26,7 +26,7 @@ import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from ..sim.trajectories import Trajectory
+from ..trajectories import Trajectory
 from .interval import IntervalPassivityController
 from .sampled_floor import FloorGrid
 

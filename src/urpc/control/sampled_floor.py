@@ -18,7 +18,7 @@ from ..bounds.base import link_body_placement
 from ..bounds.hull import barycentric_enclosure
 from ..model.inertia_bounds import InertiaBounds
 from ..model.uncertainty import ParameterBox
-from ..sim.trajectories import Trajectory
+from ..trajectories import Trajectory
 from .interval import PHI_MAX_FACTOR, IntervalPassivityController
 from .sampled_joints import JointTerms
 

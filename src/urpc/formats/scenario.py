@@ -3,7 +3,7 @@
 Documented in ``docs/scenarios.md``; read by :func:`urpc.studies.scenario.load_scenario`. Paths are
 resolved against ``context["base"]`` (the scenario's folder) and must exist. The names of the
 controllers, bound methods, plants and trajectories are declared here; tests check them against
-the registries of :mod:`urpc.bounds`, :mod:`urpc.sim.plants` and :mod:`urpc.sim.trajectories`.
+the registries of :mod:`urpc.bounds`, :mod:`urpc.sim.plants` and :mod:`urpc.trajectories`.
 """
 
 from __future__ import annotations

@@ -4,20 +4,13 @@ divergence error."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
-
 import numpy as np
 
-from ..control.base import Controller, Reference
+from ..control.base import Controller
 from ..errors import SimulationError
 from ..model.robot import Robot
+from ..trajectories import Trajectory
 from .progress import SimulationProgress
-
-
-class Trajectory(Protocol):
-    """Anything with ``reference(t) -> Reference`` (desired q [rad], qd [rad/s], qdd [rad/s^2])."""
-
-    def reference(self, t: float) -> Reference: ...
 
 
 @dataclass(frozen=True)

@@ -36,13 +36,14 @@ from ..control.base import Controller
 from ..errors import InputError
 from ..model.robot import Robot
 from ..validation import finite_vector, positive_number
-from .closed_loop import RunSetup, Trajectory
+from ..trajectories import Trajectory
+from .closed_loop import RunSetup
 from .continuous import CONTINUOUS_ATOL, CONTINUOUS_METHOD, CONTINUOUS_RTOL, run_continuous
 from .plants import PLANTS, make_plant
 from .progress import SimulationProgress
 from .results import SimulationResult
 from .sampled import DISTURBANCES, run_sampled
-from .trajectories import PaperTrajectory
+from ..trajectories import PaperTrajectory
 
 
 def simulate(
@@ -236,7 +237,7 @@ def _check_parts(plant: Any, controller: Any, trajectory: Any) -> None:
         )
     if not callable(getattr(trajectory, "reference", None)):
         raise InputError(
-            "expected a trajectory with reference(t) (urpc.sim.trajectories: PaperTrajectory, "
+            "expected a trajectory with reference(t) (urpc.trajectories: PaperTrajectory, "
             f"SinusoidTrajectory, QuinticTrajectory, generic_trajectory), got "
             f"{type(trajectory).__name__}",
             field="trajectory",

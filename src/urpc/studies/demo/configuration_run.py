@@ -15,7 +15,7 @@ from ...model.parameter_box import JOINTS, link_points
 from ...model.robot import Robot
 from ...sim.results import SimulationResult
 from ...sim.simulation import simulate
-from ...sim.trajectories import Trajectory, generic_trajectory
+from ...trajectories import Trajectory, generic_trajectory
 from ..scenario import sample_true_parameters
 from .settings import (
     DISTURBANCE_BOUND,
@@ -37,7 +37,7 @@ class ConfigurationRun:
         plant: The true plant (a seeded, physically consistent draw from the box).
         true_point: The drawn parameters (link or payload -> coordinates of its box, and
             :data:`urpc.model.parameter_box.JOINTS` -> the drawn ``(3, dof)`` drives).
-        trajectory: The desired trajectory (:func:`urpc.sim.trajectories.generic_trajectory`).
+        trajectory: The desired trajectory (:func:`urpc.trajectories.generic_trajectory`).
         result: The simulation, or ``None`` when it diverged.
         failure: Why the simulation stopped, when it diverged.
     """

@@ -10,7 +10,7 @@ from matplotlib.axes import Axes
 
 from ...model.modular import TCP_LINK
 from ...model.robot import Robot
-from ...sim.trajectories import home_configuration
+from ...trajectories import home_configuration
 from .synthesis import SynthesizedArm
 
 _KIND_COLORS = {"link": "0.45", "tool": "tab:orange", "actuator": "0.2", "base": "0.3"}

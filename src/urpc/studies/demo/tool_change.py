@@ -19,7 +19,7 @@ from ...model.parameter_box import JOINTS
 from ...model.uncertainty import ParameterBox
 from ...sim.results import SimulationResult
 from ...sim.simulation import simulate
-from ...sim.trajectories import Trajectory, generic_trajectory
+from ...trajectories import Trajectory, generic_trajectory
 from ..scenario import sample_true_parameters
 from .configuration_run import describe_point, initial_position
 from .progress import ProgressReporter

@@ -20,7 +20,7 @@ from ...model.inertia import inertia_problem
 from ...model.parameter_box import joint_values, link_points
 from ...model.robot import Robot, load_robot
 from ...model.uncertainty import UNITS, ParameterBox, load_parameter_point, load_uncertainty
-from ...sim.trajectories import (
+from ...trajectories import (
     PaperTrajectory,
     QuinticTrajectory,
     SinusoidTrajectory,

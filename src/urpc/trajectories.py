@@ -1,4 +1,5 @@
-"""Desired joint trajectories with analytic derivatives.
+"""Desired joint trajectories with analytic derivatives (below :mod:`urpc.control`: controllers,
+certificates and simulators all read references from here).
 
 A :class:`Trajectory` gives the reference ``(q_d, qd_d, qdd_d)`` [rad, rad/s, rad/s^2] (metres for
 prismatic joints) at any time ``t`` [s]; :meth:`Trajectory.evaluate` does the same for an array of
@@ -18,12 +19,25 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..control.base import Reference
-from ..errors import InputError
-from ..model.robot import Robot
+from .errors import InputError
+
+if TYPE_CHECKING:
+    from .model.robot import Robot
+
+
+@dataclass(frozen=True)
+class Reference:
+    """Desired joint trajectory at one instant: position [rad], velocity [rad/s], acceleration
+    [rad/s^2] (metres for prismatic joints), each of length ``dof``."""
+
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
 
 
 class Trajectory(ABC):
