@@ -15,11 +15,11 @@ import math
 from pathlib import Path
 
 from urpc.control.certificate import certify
-from urpc.trajectories import generic_trajectory
 from urpc.studies.certification import certify_setup
 from urpc.studies.demo.settings import DEFAULT_CONFIGURATIONS, DISTURBANCE_BOUND, DURATION
 from urpc.studies.demo.synthesis import synthesize_configuration
 from urpc.studies.scenario import build, build_controller, load_scenario, shipped_scenarios
+from urpc.trajectories import generic_trajectory
 
 IMPLICIT = {"interval": {"sampled_law": "implicit"}}
 

@@ -13,7 +13,6 @@ from conftest import RR_DIR
 from urpc.control.computed_torque import ComputedTorqueController
 from urpc.control.r_alpha import PAPER_BETAS, RAlphaController
 from urpc.errors import InputError
-from urpc.trajectories import PaperTrajectory, QuinticTrajectory, SinusoidTrajectory
 from urpc.studies.scenario import (
     CONTROLLERS,
     PLANT_BACKENDS,
@@ -27,6 +26,7 @@ from urpc.studies.scenario import (
     shipped_scenarios,
     true_parameter_values,
 )
+from urpc.trajectories import PaperTrajectory, QuinticTrajectory, SinusoidTrajectory
 
 #: Table II: sample period [s] (None: continuous), disturbance bound [N m], epsilon [rad].
 TABLE_II = {1: (None, 0.0, 1e-3), 2: (1e-4, 10.0, 1e-2), 3: (1e-3, 10.0, 1e-2)}

@@ -123,6 +123,7 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
     from .sim.metrics import METRIC_NAMES
     from .sim.results import SimulationResult
     from .sim.simulation import simulate
+    from .studies.scenario import load_scenario
     from .trajectories import (
         PaperTrajectory,
         QuinticTrajectory,
@@ -132,4 +133,3 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
         generic_trajectory,
         home_configuration,
     )
-    from .studies.scenario import load_scenario

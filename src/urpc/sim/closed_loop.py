@@ -4,6 +4,7 @@ divergence error."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 import numpy as np
 
 from ..control.base import Controller

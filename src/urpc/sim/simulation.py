@@ -35,15 +35,14 @@ import numpy as np
 from ..control.base import Controller
 from ..errors import InputError
 from ..model.robot import Robot
+from ..trajectories import PaperTrajectory, Trajectory
 from ..validation import finite_vector, positive_number
-from ..trajectories import Trajectory
 from .closed_loop import RunSetup
 from .continuous import CONTINUOUS_ATOL, CONTINUOUS_METHOD, CONTINUOUS_RTOL, run_continuous
 from .plants import PLANTS, make_plant
 from .progress import SimulationProgress
 from .results import SimulationResult
 from .sampled import DISTURBANCES, run_sampled
-from ..trajectories import PaperTrajectory
 
 
 def simulate(
