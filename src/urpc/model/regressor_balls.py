@@ -1,0 +1,500 @@
+"""Enclosures of the rigid-body dynamics over boxes of states, and of their time derivatives.
+
+The certificate (:mod:`urpc.control.cells`) needs ``M(q)``, ``Y_SL``, Coriolis matrices and
+torques bounded over whole cells of time and the tube around the reference, not at points, and
+the rates at which they change. This module evaluates the recursive Newton-Euler regressor
+``Y(q, v, a)`` (``Y pi = M(q) a + c(q, v) + g(q)``; columns as Pinocchio's
+``computeJointTorqueRegressor``: 10 standard parameters per joint body, ``m, m c, I`` about the
+body frame) in **midpoint-radius ball arithmetic**, vectorized over a batch of boxes: every input
+is a :class:`Ball` ``(mid, rad)`` of arrays and every output encloses the exact value for every
+input point of its box. A :class:`Jet` carries a ball and a ball of its time derivative through the
+same recursion (forward-mode differentiation), so that ``d/dt Y(q(t), v(t), a(t))`` is enclosed
+over a box of states *and* of their rates.
+
+Rounding: each elementary operation returns the floating-point result of the midpoints and adds
+to the radius a bound of its rounding error (``2u |result|`` for a sum or product, ``(k + 2) u``
+times the sum of the magnitudes for a ``k``-term dot product, ``u = 2^-53``), and the radius
+itself is computed with its terms inflated by ``1 + 8u`` (so that rounding the radius down cannot
+shrink it). ``sin``/``cos`` of a ball ``[x - r, x + r]`` are ``cos x +- (|sin x| r + r^2 / 2)``
+(Taylor with remainder) plus 2 ulps for the library's rounding. The model's constants (joint
+placements, axes) are taken as exact: the enclosure is of the model as Pinocchio holds it.
+
+Checked in ``tests/test_regressor_balls.py``: at zero radius the midpoint equals Pinocchio's
+regressor, mass matrix and inverse dynamics to rounding and the radius covers the difference; over
+random boxes the enclosures hold every Pinocchio evaluation at points drawn in the box, and the
+enclosed derivatives hold finite differences of Pinocchio along random curves through the box.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import UrpcError
+from .robot import Robot
+
+#: Unit roundoff of IEEE double precision.
+U = 2.0**-53
+#: Factor that keeps a radius computed in rounded arithmetic above its exact value.
+UP = 1.0 + 8 * U
+
+
+# ============================================================================ balls
+@dataclass(frozen=True)
+class Ball:
+    """An array of balls ``[mid - rad, mid + rad]`` (same shapes, ``rad >= 0``)."""
+
+    mid: np.ndarray
+    rad: np.ndarray
+
+    @staticmethod
+    def point(x) -> Ball:
+        x = np.asarray(x, dtype=float)
+        return Ball(x, np.zeros_like(x))
+
+    @staticmethod
+    def hull(lower, upper) -> Ball:
+        """A ball containing ``[lower, upper]`` (widened for the rounding of its midpoint)."""
+        lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+        mid = 0.5 * (lower + upper)
+        rad = np.maximum(upper - mid, mid - lower) * UP + 2 * U * np.abs(mid)
+        return Ball(mid, rad)
+
+    @property
+    def lower(self) -> np.ndarray:
+        return self.mid - self.rad
+
+    @property
+    def upper(self) -> np.ndarray:
+        return self.mid + self.rad
+
+    @property
+    def magnitude(self) -> np.ndarray:
+        """``max |x|`` over the ball (rounded up)."""
+        return (np.abs(self.mid) + self.rad) * UP
+
+    def __add__(self, other):
+        if isinstance(other, Jet):
+            return Jet.of(self) + other
+        mid = self.mid + other.mid
+        return Ball(mid, (self.rad + other.rad + 2 * U * np.abs(mid)) * UP)
+
+    def __sub__(self, other):
+        if isinstance(other, Jet):
+            return Jet.of(self) - other
+        mid = self.mid - other.mid
+        return Ball(mid, (self.rad + other.rad + 2 * U * np.abs(mid)) * UP)
+
+    def __neg__(self) -> Ball:
+        return Ball(-self.mid, self.rad)
+
+    def scaled(self, factor: float) -> Ball:
+        """Times an exact scalar."""
+        mid = self.mid * factor
+        return Ball(mid, (self.rad * abs(factor) + 2 * U * np.abs(mid)) * UP)
+
+    def __mul__(self, other):
+        """Elementwise product (broadcasting)."""
+        if isinstance(other, Jet):
+            return Jet.of(self) * other
+        mid = self.mid * other.mid
+        rad = (
+            np.abs(self.mid) * other.rad
+            + self.rad * np.abs(other.mid)
+            + self.rad * other.rad
+            + 2 * U * np.abs(mid)
+        )
+        return Ball(mid, rad * UP)
+
+    def __getitem__(self, index) -> Ball:
+        return Ball(self.mid[index], self.rad[index])
+
+    def map(self, function) -> Ball:
+        """A structural operation (reshape, transpose, broadcast) on both arrays."""
+        return Ball(function(self.mid), function(self.rad))
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return self.mid.shape
+
+
+@dataclass(frozen=True)
+class Jet:
+    """A ball of values and a ball of their time derivatives (forward-mode differentiation)."""
+
+    val: Ball
+    dot: Ball
+
+    @staticmethod
+    def of(x) -> Jet:
+        if isinstance(x, Jet):
+            return x
+        return Jet(x, Ball.point(np.zeros_like(x.mid)))
+
+    def __add__(self, other) -> Jet:
+        other = Jet.of(other)
+        return Jet(self.val + other.val, self.dot + other.dot)
+
+    __radd__ = __add__
+
+    def __sub__(self, other) -> Jet:
+        other = Jet.of(other)
+        return Jet(self.val - other.val, self.dot - other.dot)
+
+    def __neg__(self) -> Jet:
+        return Jet(-self.val, -self.dot)
+
+    def scaled(self, factor: float) -> Jet:
+        return Jet(self.val.scaled(factor), self.dot.scaled(factor))
+
+    def __mul__(self, other) -> Jet:
+        other = Jet.of(other)
+        return Jet(self.val * other.val, self.dot * other.val + self.val * other.dot)
+
+    __rmul__ = __mul__
+
+    def __getitem__(self, index) -> Jet:
+        return Jet(self.val[index], self.dot[index])
+
+    def map(self, function) -> Jet:
+        return Jet(self.val.map(function), self.dot.map(function))
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return self.val.shape
+
+
+def matmul(A, B):
+    """``A @ B`` on balls or jets (numpy's batched matrix product)."""
+    if isinstance(A, Jet) or isinstance(B, Jet):
+        A, B = Jet.of(A), Jet.of(B)
+        return Jet(matmul(A.val, B.val), matmul(A.dot, B.val) + matmul(A.val, B.dot))
+    terms = A.mid.shape[-1]
+    absA = np.abs(A.mid)
+    mid = A.mid @ B.mid
+    rad = absA @ B.rad + A.rad @ (np.abs(B.mid) + B.rad) + (terms + 2) * U * (absA @ np.abs(B.mid))
+    return Ball(mid, rad * UP)
+
+
+def matvec(A, x):
+    """``A x`` for matrices ``(..., i, k)`` and vectors ``(..., k)``."""
+    return matmul(A, x.map(lambda a: a[..., None])).map(lambda a: a[..., 0])
+
+
+def transposed(A):
+    return A.map(lambda a: np.swapaxes(a, -1, -2))
+
+
+def skew(x):
+    """``S(x)`` with ``S(x) y = x cross y``: shape ``(..., 3) -> (..., 3, 3)``."""
+    if isinstance(x, Jet):
+        return Jet(skew(x.val), skew(x.dot))
+
+    def build(v):
+        a, b, c = v[..., 0], v[..., 1], v[..., 2]
+        z = np.zeros_like(a)
+        return np.stack(
+            [np.stack([z, -c, b], -1), np.stack([c, z, -a], -1), np.stack([-b, a, z], -1)], -2
+        )
+
+    return Ball(build(x.mid), np.abs(build(x.rad)))
+
+
+def cross(a, b):
+    """``a x b`` of 3-vectors."""
+    return matvec(skew(a), b)
+
+
+def concatenate(parts, axis: int):
+    if any(isinstance(p, Jet) for p in parts):
+        parts = [Jet.of(p) for p in parts]
+        return Jet(
+            concatenate([p.val for p in parts], axis), concatenate([p.dot for p in parts], axis)
+        )
+    return Ball(
+        np.concatenate([p.mid for p in parts], axis), np.concatenate([p.rad for p in parts], axis)
+    )
+
+
+def stack(parts, axis: int):
+    if any(isinstance(p, Jet) for p in parts):
+        parts = [Jet.of(p) for p in parts]
+        return Jet(stack([p.val for p in parts], axis), stack([p.dot for p in parts], axis))
+    return Ball(np.stack([p.mid for p in parts], axis), np.stack([p.rad for p in parts], axis))
+
+
+def zeros(shape) -> Ball:
+    return Ball.point(np.zeros(shape))
+
+
+def cos_sin(q):
+    """``cos q``, ``sin q`` over a ball (or jet) of angles [rad]."""
+    if isinstance(q, Jet):
+        c, s = cos_sin(q.val)
+        return Jet(c, -(s * q.dot)), Jet(s, c * q.dot)
+    c, s = np.cos(q.mid), np.sin(q.mid)
+    reach = np.minimum(2.0, 0.5 * q.rad * q.rad * UP)
+    library = 4 * U  # two ulps of the library's rounding at magnitudes <= 1
+    cos = Ball(c, np.minimum(2.0, (np.abs(s) * q.rad + reach) * UP) + library)
+    sin = Ball(s, np.minimum(2.0, (np.abs(c) * q.rad + reach) * UP) + library)
+    return cos, sin
+
+
+def intersect_symmetric(M):
+    """A symmetric matrix's two enclosures of each off-diagonal entry, intersected."""
+    if isinstance(M, Jet):
+        return Jet(intersect_symmetric(M.val), intersect_symmetric(M.dot))
+    lower = np.maximum(M.lower, np.swapaxes(M.lower, -1, -2))
+    upper = np.minimum(M.upper, np.swapaxes(M.upper, -1, -2))
+    return Ball.hull(lower, upper)
+
+
+# ============================================================================ the recursion
+@dataclass(frozen=True)
+class _Joint:
+    parent: int  # joint index of the parent (-1: the base)
+    revolute: bool
+    axis: np.ndarray  # unit axis in the joint frame
+    rotation: np.ndarray  # placement rotation in the parent frame
+    translation: np.ndarray  # placement translation in the parent frame
+    # Rodrigues split of a revolute joint's rotation: R(q) = A0 + cos q A1 + sin q A2.
+    parts: tuple[np.ndarray, np.ndarray, np.ndarray] | None
+
+
+class BallRegressor:
+    """The Newton-Euler recursion of one robot's kinematics over boxes of states.
+
+    Args:
+        robot: A fixed-base chain of 1-dof revolute or prismatic joints (continuous joints are
+            revolute in the angle coordinate, like :meth:`Robot.M`).
+
+    Raises:
+        UrpcError: a joint with more than one degree of freedom or a screw motion.
+    """
+
+    def __init__(self, robot: Robot):
+        model = robot.model
+        self.dof = robot.dof
+        self.gravity = np.asarray(model.gravity.linear, dtype=float).copy()
+        neutral = pin.neutral(model)
+        joints = []
+        for j in range(1, model.njoints):
+            joint = model.joints[j]
+            if joint.nv != 1 or joint.idx_v != j - 1:
+                raise UrpcError(f"joint '{model.names[j]}' is not a 1-dof joint in chain order")
+            data = joint.createData()
+            joint.calc(data, neutral)
+            subspace = np.asarray(data.S, dtype=float).reshape(6)
+            revolute = robot.joint_kinds[j - 1] in ("revolute", "continuous")
+            axis = subspace[3:] if revolute else subspace[:3]
+            if np.any(subspace[:3] if revolute else subspace[3:]):
+                raise UrpcError(f"joint '{model.names[j]}' has a screw motion subspace")
+            placement = model.jointPlacements[j]
+            P = np.asarray(placement.rotation, dtype=float)
+            parts = None
+            if revolute:
+                outer = np.outer(axis, axis)
+                S = np.array(
+                    [[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]]
+                )
+                parts = (P @ outer, P @ (np.eye(3) - outer), P @ S)
+            joints.append(
+                _Joint(
+                    model.parents[j] - 1,
+                    revolute,
+                    axis.copy(),
+                    P.copy(),
+                    np.asarray(placement.translation, dtype=float).copy(),
+                    parts,
+                )
+            )
+        self.joints = tuple(joints)
+
+    def _constant(self, value: np.ndarray, batch: tuple[int, ...]) -> Ball:
+        return Ball.point(np.broadcast_to(value, batch + value.shape))
+
+    def _placements(self, q) -> list[tuple]:
+        """Per joint, the pose ``(R, p)`` of its frame in the parent's, over the batch."""
+        batch = q.shape[:-1]
+        poses = []
+        for k, joint in enumerate(self.joints):
+            angle = q[..., k]
+            if joint.revolute:
+                A0, A1, A2 = (self._constant(A, batch) for A in joint.parts)
+                c, s = cos_sin(angle.map(lambda a: a[..., None, None]))
+                R = A0 + c * A1 + s * A2
+                p = self._constant(joint.translation, batch)
+            else:
+                R = self._constant(joint.rotation, batch)
+                direction = self._constant(joint.rotation @ joint.axis, batch)
+                p = self._constant(joint.translation, batch) + direction * angle.map(
+                    lambda a: a[..., None]
+                )
+            poses.append((R, p))
+        return poses
+
+    def _forward(self, q, v, a, gravity_scale: float):
+        """Poses, spatial velocities and accelerations (gravity as a base acceleration)."""
+        batch = q.shape[:-1]
+        poses = self._placements(q)
+        zero3 = zeros(batch + (3,))
+        gravity = self._constant(-gravity_scale * self.gravity, batch)
+        velocities, accelerations = [], []
+        for k, joint in enumerate(self.joints):
+            R, p = poses[k]
+            if joint.parent < 0:
+                vl, vw, al, aw = zero3, zero3, gravity, zero3
+            else:
+                vl, vw = velocities[joint.parent]
+                al, aw = accelerations[joint.parent]
+            # actInv: x' = R^T x (angular), l' = R^T (l - p x w) (linear).
+            Rt = transposed(R)
+            vw_, vl_ = matvec(Rt, vw), matvec(Rt, vl - cross(p, vw))
+            aw_, al_ = matvec(Rt, aw), matvec(Rt, al - cross(p, aw))
+            axis = self._constant(joint.axis, batch)
+            own = axis * v[..., k : k + 1]  # S qd, in the joint's own frame
+            if joint.revolute:
+                vw_ = vw_ + own
+                # a += v x (S qd): angular part w x own, linear part l x own.
+                aw_ = aw_ + axis * a[..., k : k + 1] + cross(vw_, own)
+                al_ = al_ + cross(vl_, own)
+            else:
+                vl_ = vl_ + own
+                al_ = al_ + axis * a[..., k : k + 1] + cross(vw_, own)
+            velocities.append((vl_, vw_))
+            accelerations.append((al_, aw_))
+        return poses, velocities, accelerations
+
+    def _backward(self, poses, force: list):
+        """Joint torques ``S_k^T f_k`` of per-joint blocks of force rows ``(..., rows, 3)``
+        carried to the root: ``(..., rows, dof)``."""
+        torques = [None] * self.dof
+        for k in reversed(range(self.dof)):
+            joint = self.joints[k]
+            f, m = force[k]
+            batch = f.shape[:-2]
+            axis = self._constant(joint.axis, batch)
+            torques[k] = matvec(m if joint.revolute else f, axis)
+            if joint.parent >= 0:
+                R, p = poses[k]
+                # Rows are force vectors: f' = f R^T, m' = m R^T + (p x f') = m R^T - f' S(p).
+                Rt = transposed(R)
+                f_up = matmul(f, Rt)
+                m_up = matmul(m, Rt) - matmul(f_up, skew(p))
+                pf, pm = force[joint.parent]
+                force[joint.parent] = (pf + f_up, pm + m_up)
+        return stack(torques, -1)
+
+    def evaluate(self, q, v, a, gravity_scale: float = 1.0):
+        """``Y(q, v, a)`` with gravity ``gravity_scale * g``: shape ``batch + (dof, 10 dof)``.
+
+        ``q``, ``v``, ``a``: balls or jets of shape ``batch + (dof,)`` [rad, rad/s, rad/s^2]."""
+        n = self.dof
+        poses, velocities, accelerations = self._forward(q, v, a, gravity_scale)
+        force = []
+        for k in range(n):
+            lin, ang = _body_regressor(*velocities[k], *accelerations[k])  # (..., 10, 3)
+            batch = lin.shape[:-2]
+            before, after = zeros(batch + (10 * k, 3)), zeros(batch + (10 * (n - k - 1), 3))
+            force.append(
+                (concatenate([before, lin, after], -2), concatenate([before, ang, after], -2))
+            )
+        return transposed(self._backward(poses, force))
+
+    def torques(self, q, v, a, parameters, gravity_scale: float = 1.0):
+        """``Y(q, v, a) pi`` for each row ``pi`` of ``parameters`` ``(P, 10 dof)`` (an array of
+        points, or a :class:`Ball` of parameter intervals): the inverse dynamics of ``P`` models
+        at once, shape ``batch + (P, dof)``. Cheaper than :meth:`evaluate` times ``pi``: forces
+        are carried as 3-vectors, not as regressor blocks."""
+        if not isinstance(parameters, Ball):
+            parameters = Ball.point(np.atleast_2d(np.asarray(parameters, dtype=float)))
+        poses, velocities, accelerations = self._forward(q, v, a, gravity_scale)
+        force = []
+        for k in range(self.dof):
+            lin, ang = _body_regressor(*velocities[k], *accelerations[k])  # (..., 10, 3)
+            pi = parameters[:, 10 * k : 10 * k + 10]  # (P, 10)
+            force.append((matmul(pi, lin), matmul(pi, ang)))  # (..., P, 3)
+        return self._backward(poses, force)
+
+    def slotine_li(self, q, qd, qd_a, qdd_a):
+        """``Y_SL(q, qd, qd_a, qdd_a)`` (``M qdd_a + C(q, qd) qd_a + g``, Christoffel ``C``) over
+        the boxes: ``(Y_{2g}(q, qd + qd_a, 2 qdd_a) - Y_{-2g}(q, qd - qd_a, -2 qdd_a)) / 4``."""
+        plus = self.evaluate(q, qd + qd_a, qdd_a.scaled(2.0), gravity_scale=2.0)
+        minus = self.evaluate(q, qd - qd_a, qdd_a.scaled(-2.0), gravity_scale=-2.0)
+        return (plus - minus).scaled(0.25)
+
+    def mass_matrices(self, q, parameters):
+        """``M(q)`` of each model (rows of ``parameters``, armature excluded) over the boxes of
+        ``q``: ``batch + (P, dof, dof)``. Column ``j`` is ``Y(q, 0, e_j) pi`` without gravity; the
+        two enclosures of each off-diagonal entry are intersected. With a jet ``q`` (``q`` and
+        ``qd``) the derivative is ``dM/dt = C(q, qd) + C(q, qd)^T``, enclosed."""
+        n = self.dof
+        batch = q.shape[:-1]
+        qq = q.map(lambda x: np.broadcast_to(x[..., None, :], batch + (n, n)))
+        zero = zeros(batch + (n, n))
+        unit = Ball.point(np.broadcast_to(np.eye(n), batch + (n, n)))
+        columns = self.torques(qq, zero, unit, parameters, gravity_scale=0.0)  # (..., j, P, i)
+        return intersect_symmetric(columns.map(lambda x: np.moveaxis(x, -3, -1)))
+
+    def coriolis_matrices(self, q, qd, parameters):
+        """The Christoffel ``C(q, qd)`` of each model over the boxes: ``batch + (P, dof, dof)``,
+        column ``j`` by polarization ``(c(q, qd + e_j) - c(q, qd - e_j)) / 4``, ``c(q, x) =
+        Y(q, x, 0) pi`` without gravity."""
+        n = self.dof
+        batch = q.shape[:-1]
+        qq = q.map(lambda x: np.broadcast_to(x[..., None, :], batch + (n, n)))
+        unit = Ball.point(np.broadcast_to(np.eye(n), batch + (n, n)))
+        rates = qd.map(lambda x: np.broadcast_to(x[..., None, :], batch + (n, n)))
+        zero = zeros(batch + (n, n))
+        plus = self.torques(qq, rates + unit, zero, parameters, gravity_scale=0.0)
+        minus = self.torques(qq, rates - unit, zero, parameters, gravity_scale=0.0)
+        return (plus - minus).scaled(0.25).map(lambda x: np.moveaxis(x, -3, -1))
+
+
+def parameters_of(robot: Robot) -> np.ndarray:
+    """The standard parameters ``pi`` of a model's joint bodies (Pinocchio order), ``(10 dof,)``."""
+    model = robot.model
+    return np.concatenate(
+        [np.asarray(model.inertias[j].toDynamicParameters()) for j in range(1, model.njoints)]
+    )
+
+
+def _body_regressor(vl, vw, al, aw):
+    """The body regressor ``Phi(v, a)``: the force ``f = I a + v x* (I v)`` as a linear map of
+    ``pi = (m, h, I_xx, I_xy, I_yy, I_xz, I_yz, I_zz)`` (``h = m c``, ``I`` about the origin);
+    returns its linear and angular parts as ``(..., 10, 3)`` (parameter, component)::
+
+        f_lin = m (a_l + w x v_l) + (S(a_w) + S(w)^2) h
+        f_ang = -S(a_l - v_l x w) h + (L(a_w) + S(w) L(w)) iota,    I x = L(x) iota
+    """
+    batch = vl.shape[:-1]
+    Sw = skew(vw)
+    mass_lin = (al + cross(vw, vl)).map(lambda x: x[..., None])  # (..., 3, 1)
+    h_lin = skew(aw) + matmul(Sw, Sw)
+    h_ang = -skew(al - cross(vl, vw))
+    i_ang = _inertia_map(aw) + matmul(Sw, _inertia_map(vw))  # (..., 3, 6)
+    lin = concatenate([mass_lin, h_lin, zeros(batch + (3, 6))], -1)
+    ang = concatenate([zeros(batch + (3, 1)), h_ang, i_ang], -1)
+    return transposed(lin), transposed(ang)
+
+
+def _inertia_map(x):
+    """``L(x)`` with ``I x = L(x) iota`` for ``iota = (xx, xy, yy, xz, yz, zz)``: (..., 3, 6)."""
+    if isinstance(x, Jet):
+        return Jet(_inertia_map(x.val), _inertia_map(x.dot))
+
+    def build(v):
+        a, b, c = v[..., 0], v[..., 1], v[..., 2]
+        z = np.zeros_like(a)
+        return np.stack(
+            [
+                np.stack([a, b, z, c, z, z], -1),
+                np.stack([z, a, b, z, c, z], -1),
+                np.stack([z, z, z, a, b, c], -1),
+            ],
+            -2,
+        )
+
+    return Ball(build(x.mid), np.abs(build(x.rad)))
