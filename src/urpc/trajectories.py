@@ -60,6 +60,48 @@ class Trajectory(ABC):
         q, qd, qdd = self.evaluate(float(t))
         return Reference(q=q, qd=qd, qdd=qdd)
 
+    def jerk_bound(self, start: np.ndarray, stop: np.ndarray) -> np.ndarray:
+        """A bound of ``|d^3 q_d / dt^3|`` [rad/s^3] per joint over each time interval
+        ``[start, stop]`` (arrays of the same shape; result ``shape + (dof,)``), where the third
+        derivative exists (the reference must be twice continuously differentiable).
+
+        The certificate (:func:`urpc.certify`) encloses the reference over whole cells of time
+        from it (:meth:`enclose`). A trajectory class that does not provide it cannot be
+        certified; the shipped ones give it in closed form."""
+        raise NotImplementedError(
+            f"{type(self).__name__} gives no jerk bound: implement jerk_bound(start, stop) "
+            "(a bound of |d^3 q_d/dt^3| per joint over [start, stop]) to certify it"
+        )
+
+    def enclose(self, start, stop) -> tuple[np.ndarray, ...]:
+        """The reference over whole time intervals ``[start, stop]`` [s] (arrays, one per cell):
+        ``(q, rq, qd, rqd, qdd, rqdd, J)``, centers and radii of ``q_d``, ``qd_d``, ``qdd_d`` and
+        the jerk bound, each of shape ``cells + (dof,)``: ``|x(t) - x_c| <= r_x`` for every ``t``
+        of a cell.
+
+        Taylor expansion at the midpoint ``t_c`` with the Lagrange remainder (``h`` the
+        half-width, ``J`` :meth:`jerk_bound`)::
+
+            |qdd(t) - qdd(t_c)| <= h J
+            |qd(t) - qd(t_c)|   <= h |qdd(t_c)| + h^2 J / 2
+            |q(t) - q(t_c)|     <= h |qd(t_c)| + h^2 |qdd(t_c)| / 2 + h^3 J / 6
+
+        plus a relative 1e-14 for the rounding of the evaluation at ``t_c``."""
+        start, stop = np.asarray(start, dtype=float), np.asarray(stop, dtype=float)
+        center = 0.5 * (start + stop)
+        h = (0.5 * (stop - start))[..., None]
+        shape = center.shape + (self.dof,)
+        q, qd, qdd = (np.broadcast_to(x, shape) for x in self.evaluate(center))
+        J = np.broadcast_to(self.jerk_bound(start, stop), shape)
+
+        def rounding(x):
+            return 1e-14 * (1.0 + np.abs(x))
+
+        radius_qdd = h * J + rounding(qdd)
+        radius_qd = h * np.abs(qdd) + 0.5 * h * h * J + rounding(qd)
+        radius_q = h * np.abs(qd) + 0.5 * h * h * np.abs(qdd) + h**3 * J / 6 + rounding(q)
+        return q, radius_q, qd, radius_qd, qdd, radius_qdd, J
+
 
 def _vector(value: float | Sequence[float] | np.ndarray, dof: int, name: str) -> np.ndarray:
     array = np.asarray(value, dtype=float)
@@ -110,6 +152,11 @@ class PaperTrajectory(Trajectory):
             qdd=a * (-(5 * w**2 / 4) * s1 * s2 + w**2 * c1 * c2),
         )
 
+    def jerk_bound(self, start, stop):
+        # q = a (cos(pi t / 2) - cos(3 pi t / 2)) / 2: |q^(3)| <= |a| ((pi/2)^3 + (3 pi/2)^3) / 2.
+        peak = np.abs(self.amplitude) * 0.5 * ((np.pi / 2) ** 3 + (3 * np.pi / 2) ** 3)
+        return np.broadcast_to(peak, np.shape(start) + (self.dof,))
+
     def __repr__(self) -> str:
         return f"PaperTrajectory(amplitude={self.amplitude.tolist()})"
 
@@ -157,6 +204,10 @@ class SinusoidTrajectory(Trajectory):
             qd=self._velocity_gain * np.cos(angle),
             qdd=self._acceleration_gain * s,
         )
+
+    def jerk_bound(self, start, stop):
+        peak = np.abs(self.amplitude) * self._omega**3
+        return np.broadcast_to(peak, np.shape(start) + (self.dof,))
 
     @property
     def peak_velocity(self) -> np.ndarray:
@@ -222,6 +273,24 @@ class QuinticTrajectory(Trajectory):
         blend_dd = 60 * tau * (1 - tau) * (1 - 2 * tau) / length**2
         delta = self.points[k + 1] - self.points[k]
         return self.points[k] + delta * blend, delta * blend_d, delta * blend_dd
+
+    def jerk_bound(self, start, stop):
+        """``60 |p_{k+1} - p_k| / L_k^3`` over the segments that meet ``[start, stop]`` (the
+        blend's third derivative ``(60 - 360 tau + 360 tau^2) / L^3`` peaks at the segment ends);
+        zero where the trajectory holds a point."""
+        start, stop = np.asarray(start, dtype=float), np.asarray(stop, dtype=float)
+        lengths = np.diff(self.times)
+        peaks = 60.0 * np.abs(np.diff(self.points, axis=0)) / lengths[:, None] ** 3  # (seg, dof)
+        last_segment = len(lengths) - 1
+        first = np.clip(np.searchsorted(self.times, start, side="right") - 1, 0, last_segment)
+        last = np.clip(np.searchsorted(self.times, stop, side="left") - 1, 0, last_segment)
+        result = np.zeros(start.shape + (self.dof,))
+        for index in np.ndindex(start.shape):
+            if stop[index] <= self.times[0] or start[index] >= self.times[-1]:
+                continue  # holding a point
+            a = first[index]
+            result[index] = peaks[a : max(a, last[index]) + 1].max(axis=0)
+        return result
 
     def __repr__(self) -> str:
         return f"QuinticTrajectory(points={self.points.tolist()}, times={self.times.tolist()})"

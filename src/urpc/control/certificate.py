@@ -26,9 +26,11 @@ import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+import numpy as np
+
 from ..trajectories import Trajectory
+from .cells import CellFloor
 from .interval import IntervalPassivityController
-from .sampled_floor import FloorGrid
 
 
 @dataclass(frozen=True)
@@ -99,21 +101,23 @@ def certify(
     *,
     duration: float,
     disturbance_bound: float | None = None,
+    cells: int | None = None,
 ) -> Certificate:
     """The certificate of ``controller`` tracking ``trajectory`` over ``[0, duration]`` [s].
 
     Args:
         controller: A synthesized interval controller (its robot, box, gains, period and law).
-        trajectory: The reference the guarantee is asked for.
+        trajectory: The reference the guarantee is asked for (it must give
+            :meth:`~urpc.trajectories.Trajectory.jerk_bound`, as the shipped ones do).
         duration: The time span of the reference to cover [s].
         disturbance_bound: ``||d||`` bound [N m] the plant sees. Theorem 2 does not need it in
             continuous time, but the sampled-data floor does; defaults to the box's bound.
+        cells: Number of cells of time (default: chosen from the reference's speed).
     """
     box = controller.bound.box
     d = box.disturbance_bound if disturbance_bound is None else float(disturbance_bound)
     conditions = _theorem_conditions(controller)
     law = "continuous" if controller.sample_period is None else controller.sampled_law
-    grid = FloorGrid(controller, trajectory, duration)
     if d is None and law == "implicit":  # Theorem 2 needs no bound in continuous time
         conditions.append(
             Condition(
@@ -123,11 +127,16 @@ def certify(
             )
         )  # fmt: skip
     d = math.nan if d is None else d
-    figures = grid.figures()
-    max_period = grid.max_sample_period(controller.epsilon, d) if math.isfinite(d) else 0.0
+    floor_of = CellFloor(controller, trajectory, duration, cells=cells)
+    figures: dict[str, Any] = {}
+    max_period = 0.0
     if controller.sample_period is None:
-        floor = 0.0 if controller.adaptive else grid.theorem1_floor(controller.kappa_P)
+        quantities = floor_of.quantities(0.0, 0.0, 0.0)
+        figures.update(floor_of.figures(quantities))
+        floor = 0.0 if controller.adaptive else _theorem1_floor(figures, controller)
     elif law == "paper":
+        quantities = floor_of.quantities(0.0, 0.0, controller.sample_period)
+        figures.update(floor_of.figures(quantities))
         floor = math.inf
         limit = 2.0 * figures["lambda_L"] / controller.sample_period
         gain = math.inf if controller.adaptive else controller.phi_P
@@ -140,8 +149,12 @@ def certify(
             )
         )  # fmt: skip
     else:
-        floor, parts = grid.floor(controller.sample_period, d, controller.epsilon)
+        search = _SampledSearch(floor_of, controller, d)
+        floor, parts, quantities = search.floor()
+        max_period = search.max_sample_period() if math.isfinite(d) else 0.0
+        figures.update(floor_of.figures(quantities))
         figures.update(parts)
+        figures.update(search.report(floor, parts))
         conditions += _sampled_conditions(figures, floor, controller.epsilon, max_period)
     holds = all(c.holds for c in conditions) and floor <= controller.epsilon
     if controller.sample_period is None and not controller.adaptive:
@@ -156,6 +169,141 @@ def certify(
         bool(holds), controller.epsilon, float(floor), float(max_period),
         controller.sample_period, law, ordered, figures,
     )  # fmt: skip
+
+
+class _SampledSearch:
+    """The floor of the implicit law as a fixed point over tubes, and the largest period.
+
+    Every evaluation bounds the quantities over the tube ``||e|| <= rho``, ``||r|| <= r_max``; a
+    tube with ``floor(rho) <= rho`` and ``r_sup <= r_max`` is invariant once the gains have
+    saturated, and the error ends up below ``floor(rho)``. The cells are widened by
+    ``2 T``, so that the same enclosures serve every period up to ``2 T``."""
+
+    def __init__(self, floor_of: CellFloor, controller: IntervalPassivityController, d: float):
+        self.floor_of, self.controller, self.d = floor_of, controller, d
+        self.T = controller.sample_period
+        self.extension = 2.0 * self.T
+        self.epsilon = controller.epsilon
+
+    def enclose(self, tube: float, T: float | None = None) -> dict:
+        """The cell quantities over the tube ``||e|| <= tube`` with ``||r|| <= r_max``, raising
+        ``r_max`` until the bound of ``||r||`` at the least self-consistent tube lies inside it."""
+        T = self.T if T is None else T
+        r_max = 1.5 * float(self.controller.Kr.max()) * tube + 1e-6
+        for _ in range(5):
+            quantities = self.floor_of.quantities(tube, r_max, self.extension)
+            floor, parts, _ = self.least_tube(quantities, T)
+            if not math.isfinite(floor) or parts["r_sup"] <= r_max:
+                return quantities
+            r_max = 1.25 * parts["r_sup"]
+        return quantities
+
+    def least_tube(self, quantities: dict, T: float) -> tuple[float, dict, float]:
+        """The least ``rho <= tube`` with ``floor(rho) <= rho`` (the fixed point reached from
+        ``rho = 0``, each quantity bounded over the enclosing tube), its floor and parts."""
+        top = quantities["tube"]
+        rho, floor, parts = 0.0, math.inf, {}
+        for _ in range(60):
+            floor, parts = self.floor_of.floor_at(T, self.d, quantities, rho)
+            if not math.isfinite(floor) or floor > top:
+                return math.inf, parts, rho
+            if floor <= rho:
+                return floor, parts, rho
+            rho = min(top, max(floor * 1.0005, rho * 1.0005))
+        return math.inf, parts, rho
+
+    def basin(self, quantities: dict, least: float) -> float:
+        """The largest tube ``rho`` in ``[least, tube]`` (scanned down by 10 %) that maps into
+        itself with ``||r||`` inside the enclosure: the states from which the floor is reached
+        once the gains have saturated."""
+        rho = quantities["tube"]
+        while rho > least:
+            floor, parts = self.floor_of.floor_at(self.T, self.d, quantities, rho)
+            if floor <= rho and parts.get("r_sup", math.inf) <= quantities["r_max"]:
+                return rho
+            rho *= 0.9
+        return least
+
+    def floor(self) -> tuple[float, dict, dict]:
+        """The floor: within the tube ``||e|| <= epsilon`` if there is one, else in wider tubes
+        (up to ``10 epsilon``) for the report; ``inf`` beyond."""
+        tube = self.epsilon
+        if not math.isfinite(self.d):
+            quantities = self.floor_of.quantities(tube, 0.0, self.extension)
+            return math.inf, {"margin": -math.inf}, quantities
+        while True:
+            quantities = self.enclose(tube)
+            floor, parts, rho = self.least_tube(quantities, self.T)
+            if math.isfinite(floor) and parts["r_sup"] <= quantities["r_max"]:
+                basin = self.basin(quantities, rho)
+                parts.update(tube=rho, r_max=quantities["r_max"], basin_tube=basin)
+                return floor, parts, quantities
+            if tube >= 10.0 * self.epsilon:
+                break
+            tube *= 10.0
+        quantities = self.enclose(self.epsilon)
+        _, parts = self.floor_of.floor_at(self.T, self.d, quantities)
+        parts.update(tube=self.epsilon, r_max=quantities["r_max"])
+        return math.inf, parts, quantities
+
+    def max_sample_period(self) -> float:
+        """The largest ``T <= 2 T_controller`` with a floor below ``epsilon`` in the tube
+        ``||e|| <= epsilon`` (the cells' enclosures hold for every period up to ``2 T``)."""
+        quantities = self.enclose(self.epsilon)  # cached from floor()
+
+        def ok(T: float) -> bool:
+            floor, parts, _ = self.least_tube(quantities, T)
+            return floor <= self.epsilon and parts.get("r_sup", math.inf) <= quantities["r_max"]
+
+        low, high = self.extension * 1e-4, self.extension
+        if not ok(low):
+            return 0.0
+        if ok(high):
+            return high
+        for _ in range(40):
+            middle = math.sqrt(low * high)
+            low, high = (middle, high) if ok(middle) else (low, middle)
+            if high / low < 1.005:
+                break
+        return low
+
+    def report(self, floor: float, parts: dict) -> dict[str, Any]:
+        """What dominates the floor, where, and what would certify."""
+        floor_of = self.floor_of
+        shares = parts.get("shares") or {}
+        out: dict[str, Any] = {}
+        if shares:
+            dominant = max(shares, key=shares.get)
+            total = sum(shares.values()) or 1.0
+            out["dominant_term"] = dominant
+            out["term_shares"] = {k: v / total for k, v in shares.items()}
+            cell = parts.get("slow_cell", 0)
+            out["worst_time"] = floor_of.cell_time(cell)[0]
+            quantities = floor_of.quantities(
+                parts.get("basin_tube", self.epsilon), parts["r_max"], self.extension
+            )
+            lightest = _lightest_joint(floor_of, quantities, cell)
+            out["lightest_joint"] = floor_of.robot.joint_names[lightest]
+        if self.controller.adaptive and self.controller.phi_I > 0:
+            s_max = (self.controller.phi_max - self.controller.phi_P) / self.controller.phi_I
+            #: Before the gains saturate, ||e_k|| >= epsilon for at most s_max / epsilon seconds.
+            out["time_above_epsilon_before_saturation"] = s_max / self.epsilon
+        return out
+
+
+def _lightest_joint(floor_of: CellFloor, quantities: dict, cell: int) -> int:
+    """The joint whose diagonal of ``M_L^-1`` is largest at a cell (the lightest mode's joint)."""
+    law = floor_of.regressor  # noqa: F841 (the law's inverse is in the quantities)
+    inverse = quantities["law_inverse_diagonal"][cell]
+    return int(np.argmax(inverse))
+
+
+def _theorem1_floor(figures: dict, controller: IntervalPassivityController) -> float:
+    """Theorem 1: ``||r|| <= sqrt(lambda_max / lambda_min) / kappa_P``, ``||e|| <= ||r|| / Kr``."""
+    if not figures["lambda_L"] > 0:
+        return math.inf
+    ratio = figures["lambda_U"] / figures["lambda_L"]
+    return float(math.sqrt(ratio) / controller.kappa_P / np.min(controller.Kr))
 
 
 def _theorem_conditions(controller: IntervalPassivityController) -> list[Condition]:

@@ -1,9 +1,7 @@
 """The joints' armature, damping and Coulomb friction in the sampled-data floor
-(:mod:`urpc.control.sampled_floor`, docs/sampled-data.md "Joint dynamics")."""
+(:mod:`urpc.control.cells`, docs/sampled-data.md "Joint dynamics")."""
 
 from __future__ import annotations
-
-from typing import Any
 
 import numpy as np
 
@@ -44,20 +42,4 @@ class JointTerms:
             return np.zeros(len(Kr))
         return self.armature * (np.abs(qdd) + Kr * Kr * tube) + self.viscous * (
             np.abs(qd) + Kr * tube
-        )
-
-    def change(self, grid: Any, j: int, tube: float) -> float:
-        """The change of ``M_L^-1 w_joint`` from grid point ``j`` to ``j + 1`` (the worst sign
-        of each parameter) on the :class:`~urpc.control.sampled_floor.FloorGrid` ``grid``:
-        ``||dM_L^-1|| ||c|| + || |M_L^-1| dc ||``."""
-        if self.armature.size == 0:
-            return 0.0
-        c = self.smooth(grid.qd[j], grid.qdd[j], grid.Kr, tube)
-        difference = self.armature * np.abs(grid.qdd[j + 1] - grid.qdd[j]) + self.viscous * np.abs(
-            grid.qd[j + 1] - grid.qd[j]
-        )
-        inverse_change = np.linalg.norm(grid.law_inverse[j + 1] - grid.law_inverse[j], 2)
-        return float(
-            inverse_change * np.linalg.norm(c)
-            + np.linalg.norm(np.abs(grid.law_inverse[j + 1]) @ difference)
         )

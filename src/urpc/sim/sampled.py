@@ -16,8 +16,11 @@ from .plants import Plant
 
 #: The disturbance models of a sampled run: ``ball`` draws ``d_k`` uniformly in ``||d|| <= D``
 #: (seeded); ``against`` holds ``d_k = -D r_k / ||r_k||``, magnitude ``D`` against the sliding
-#: variable ``r = (qd_d - qd) + Kr (q_d - q)`` of the sample (``0`` where ``r = 0``).
-DISTURBANCES = ("ball", "against")
+#: variable ``r = (qd_d - qd) + Kr (q_d - q)`` of the sample (``0`` where ``r = 0``); ``worst``
+#: holds ``d_k = -D M^-1 r_k / ||M^-1 r_k||`` with the plant's ``M(q_k)``: at its bound, against
+#: ``r`` in the ``M^-1`` metric (the direction that grows ``||r||`` fastest, the certificate's
+#: worst case).
+DISTURBANCES = ("ball", "against", "worst")
 
 
 def run_sampled(
@@ -36,10 +39,11 @@ def run_sampled(
     n = stepper.dof
     n_periods = max(1, math.ceil(setup.duration / period - 1e-9))
     samples = n_periods + 1
-    against = disturbance_model == "against" and disturbance_bound > 0
+    against = disturbance_model in ("against", "worst") and disturbance_bound > 0
+    worst = disturbance_model == "worst"
     if disturbance_model == "ball":
         disturbance = ball_samples(samples, n, disturbance_bound, np.random.default_rng(seed))
-    elif disturbance_model == "against":
+    elif disturbance_model in ("against", "worst"):
         disturbance = np.zeros((samples, n))  # filled sample by sample
         Kr = np.broadcast_to(np.asarray(getattr(controller, "Kr", 1.0), dtype=float), (n,))
     else:
@@ -78,7 +82,10 @@ def run_sampled(
         qdes_series[k], qddes_series[k] = reference.q, reference.qd
         torque[k] = u
         if against:
-            disturbance[k] = against_r(reference.q - q, reference.qd - qd, Kr, disturbance_bound)
+            disturbance[k] = against_r(
+                reference.q - q, reference.qd - qd, Kr, disturbance_bound,
+                setup.plant.M(q) if worst else None,
+            )  # fmt: skip
         if has_gains:
             if state is not gains_of:  # advance() returns the same array while nothing changes
                 named = controller.diagnostics(state)
@@ -129,10 +136,15 @@ def run_sampled(
     return series, info
 
 
-def against_r(e: np.ndarray, ed: np.ndarray, Kr: np.ndarray, magnitude: float) -> np.ndarray:
+def against_r(
+    e: np.ndarray, ed: np.ndarray, Kr: np.ndarray, magnitude: float, inertia=None
+) -> np.ndarray:
     """``-magnitude r / ||r||`` with ``r = ed + Kr e`` [N m]: the constant-magnitude disturbance
-    pushing against the sliding variable (zero where ``r = 0``)."""
+    pushing against the sliding variable (zero where ``r = 0``); with the plant's ``inertia``,
+    ``-magnitude M^-1 r / ||M^-1 r||`` (against ``r`` in the ``M^-1`` metric)."""
     r = ed + Kr * e
+    if inertia is not None:
+        r = np.linalg.solve(inertia, r)
     norm = math.sqrt(r @ r)
     if norm == 0.0:
         return np.zeros_like(r)
