@@ -81,14 +81,16 @@ def run(
     *,
     clock=time.monotonic,
     start_timeout: float = 5.0,
+    first: RobotState | None = None,
 ) -> RunReport:
     """Drive ``robot`` with ``loop`` for ``duration`` [s] of loop time, behind ``safety`` and
-    ``watchdog``; the robot is stopped (:meth:`RobotInterface.stop`) however the run ends."""
+    ``watchdog``; the robot is stopped (:meth:`RobotInterface.stop`) however the run ends.
+    ``first``: a state already read (its sample is the run's first)."""
     period = loop.period
     cycles_wanted = max(1, math.ceil(duration / period - 1e-9)) + 1
     read_timeout = min(period, watchdog.silence)
     try:
-        state = robot.read_state(start_timeout)
+        state = robot.read_state(start_timeout) if first is None else first
         start = clock()
         if state is None:
             return _report(

@@ -125,7 +125,8 @@ class VirtualArm:
         self.period = float(period)
         self.options = options
         self.dof = n = plant_robot.dof
-        self.plant = make_plant(backend, plant_robot)
+        # Two RK4 steps per period: the plant of a 1 kHz arm in well under a period of Python.
+        self.plant = make_plant(backend, plant_robot, max_step=self.period / 2)
         self.plant.reset(np.zeros(n) if q0 is None else q0, None if qd0 is None else qd0)
         self._rng = np.random.default_rng(options.seed)
         self.seq = 0

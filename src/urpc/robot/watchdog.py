@@ -5,7 +5,8 @@ A cycle is **late** when its torque was sent more than ``deadline`` [s] after it
 (default: half a period, so that a robot that waits for the torque, :mod:`urpc.robot.virtual`
 with no delay, still gets it within the period). The watchdog **trips** when more than
 ``late_budget`` consecutive cycles are late, or when no state has arrived for ``silence`` [s]
-(default ``(late_budget + 1)`` periods); the loop then sends the safe command and stops with
+(default :data:`SILENCE`: a robot that stops talking is the robot's fault, which its own watchdog
+handles; the loop only has to notice it is gone); the loop then sends the safe command and stops with
 :attr:`Watchdog.message`. Every late cycle and every sample lost on the way (a gap in the
 sequence numbers) is counted.
 """
@@ -13,6 +14,9 @@ sequence numbers) is counted.
 from __future__ import annotations
 
 from ..errors import InputError
+
+#: Default longest time without a state before the watchdog trips [s].
+SILENCE = 0.05
 
 
 class Watchdog:
@@ -24,7 +28,7 @@ class Watchdog:
             ``period / 2``.
         late_budget: Consecutive late cycles tolerated; one more trips the watchdog.
         silence: Longest time without a state [s] before it trips; default
-            ``(late_budget + 1) * period``.
+            :data:`SILENCE`, and never less than ``(late_budget + 1) * period``.
 
     Attributes:
         late_cycles: Late cycles so far.
@@ -45,7 +49,8 @@ class Watchdog:
         if not 0 < self.deadline:
             raise InputError(f"{deadline} must be > 0 [s]", field="deadline")
         self.late_budget = int(late_budget)
-        self.silence = (self.late_budget + 1) * self.period if silence is None else float(silence)
+        floor = (self.late_budget + 1) * self.period
+        self.silence = max(SILENCE, floor) if silence is None else float(silence)
         self.late_cycles = 0
         self.consecutive = 0
         self.cycles = 0
