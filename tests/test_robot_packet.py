@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
+from urpc.errors import InputError
 from urpc.robot import packet
 from urpc.robot.udp import parse_address
-from urpc.errors import InputError
 
 
 def test_state_round_trip_is_exact_and_sized():

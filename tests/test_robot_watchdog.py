@@ -8,7 +8,7 @@ import urpc
 from urpc.robot.loop import ControlLoop
 from urpc.robot.runner import run
 from urpc.robot.safety import SafetyLayer
-from urpc.robot.virtual import ArmOptions, FakeClock, LockstepRobot, VirtualArm
+from urpc.robot.virtual import FakeClock, LockstepRobot, VirtualArm
 from urpc.robot.watchdog import Watchdog
 
 
@@ -83,7 +83,9 @@ def run_lockstep(rr, response_time, **watchdog):
 
 def test_a_stalling_loop_is_stopped_by_its_watchdog_with_the_safe_command(rr):
     # On time for 100 cycles, then every answer takes 0.8 ms (deadline 0.5 ms).
-    report, loop, safety, arm = run_lockstep(rr, lambda seq: 1e-4 if seq < 100 else 8e-4, late_budget=5)
+    report, loop, safety, arm = run_lockstep(
+        rr, lambda seq: 1e-4 if seq < 100 else 8e-4, late_budget=5
+    )
     assert report.ending == "watchdog" and "6 consecutive late cycles" in report.message
     assert report.cycles == 106 and safety.counts["watchdog"] == 1
     assert np.array_equal(safety.last_torque, np.zeros(2))  # the safe command was the last one
@@ -102,6 +104,13 @@ def test_a_silent_robot_trips_the_loop(rr):
     clock = FakeClock()
     silent = Silent(VirtualArm(plant, 1e-3), clock, 1e-4)
     loop = ControlLoop(controller, urpc.PaperTrajectory())
-    report = run(silent, loop, SafetyLayer.for_robot(robot, 1e-3), Watchdog(1e-3, silence=0.01), 1.0, clock=clock)
+    report = run(
+        silent,
+        loop,
+        SafetyLayer.for_robot(robot, 1e-3),
+        Watchdog(1e-3, silence=0.01),
+        1.0,
+        clock=clock,
+    )
     assert report.ending == "watchdog" and "no state from the robot" in report.message
     assert report.cycles == 51  # samples 0..50, then silence

@@ -412,7 +412,7 @@ def check_limits(
     """Refuse a trajectory that leaves the robot's position or velocity limits, or
     ``acceleration_limit`` [rad/s^2] (scalar or per joint; ``None``: none), on a grid of ``step``
     [s] over its samples (``times``, default: its own ``t`` or ``times``); the error names the
-    nearest sample and the joint."""
+    joint and the sample nearest to its worst violation."""
     samples = np.asarray(
         times
         if times is not None
@@ -448,7 +448,8 @@ def check_limits(
     describe = getattr(trajectory, "describe", None)
     for what, bad, values, text in checks:
         if bad.any():
-            i, j = np.argwhere(bad)[0]
+            # the worst violation (a jump between two samples, not the ringing around it)
+            i, j = np.unravel_index(np.argmax(np.where(bad, np.abs(values), -np.inf)), bad.shape)
             row = int(np.clip(np.searchsorted(samples, grid[i]), 0, len(samples) - 1))
             if row > 0 and abs(samples[row - 1] - grid[i]) < abs(samples[row] - grid[i]):
                 row -= 1

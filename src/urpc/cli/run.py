@@ -28,18 +28,74 @@ def register(commands) -> None:
         "when the run completed, 1 when a fault or the watchdog stopped it (one error: line), "
         "2 on bad input.",
     )
-    p.add_argument("scenario", metavar="SCENARIO", help="scenario YAML file or shipped name (rr_planar/s3_ic1 ...)")
-    p.add_argument("--robot-address", required=True, metavar="URL", help="udp://127.0.0.1:PORT (loopback only)")
-    p.add_argument("--duration", type=positive_float, metavar="S", help="run time after the approach [s] (default: the scenario's)")
-    p.add_argument("--controller", metavar="FILE", type=Path, help="a controller saved with controller.save() (default: synthesize)")
-    p.add_argument("--save-controller", metavar="FILE", type=Path, help="also save the synthesized controller to FILE")
-    p.add_argument("--delay", type=int, choices=(0, 1), help="samples of actuation delay the law predicts over (default: the scenario's)")
-    p.add_argument("--sampled-law", choices=("implicit", "paper"), help="law of the interval controller (default: the scenario's)")
-    p.add_argument("--safe-mode", choices=("zero", "damping"), default="damping", help="safe command on a fault (damping)")
-    p.add_argument("--torque-rate", type=positive_float, metavar="R", help="torque-rate limit [N m/s] (default: none)")
-    p.add_argument("--late-budget", type=non_negative_int, default=5, metavar="N", help="consecutive late cycles tolerated (5)")
-    p.add_argument("--deadline-ms", type=positive_float, metavar="MS", help="state-to-torque deadline [ms] (half a period)")
-    p.add_argument("--out", type=Path, metavar="DIR", help="save result.npz, result.csv, summary.json, run.json")
+    p.add_argument(
+        "scenario",
+        metavar="SCENARIO",
+        help="scenario YAML file or shipped name (rr_planar/s3_ic1 ...)",
+    )
+    p.add_argument(
+        "--robot-address", required=True, metavar="URL", help="udp://127.0.0.1:PORT (loopback only)"
+    )
+    p.add_argument(
+        "--duration",
+        type=positive_float,
+        metavar="S",
+        help="run time after the approach [s] (default: the scenario's)",
+    )
+    p.add_argument(
+        "--controller",
+        metavar="FILE",
+        type=Path,
+        help="a controller saved with controller.save() (default: synthesize)",
+    )
+    p.add_argument(
+        "--save-controller",
+        metavar="FILE",
+        type=Path,
+        help="also save the synthesized controller to FILE",
+    )
+    p.add_argument(
+        "--delay",
+        type=int,
+        choices=(0, 1),
+        help="samples of actuation delay the law predicts over (default: the scenario's)",
+    )
+    p.add_argument(
+        "--sampled-law",
+        choices=("implicit", "paper"),
+        help="law of the interval controller (default: the scenario's)",
+    )
+    p.add_argument(
+        "--safe-mode",
+        choices=("zero", "damping"),
+        default="damping",
+        help="safe command on a fault (damping)",
+    )
+    p.add_argument(
+        "--torque-rate",
+        type=positive_float,
+        metavar="R",
+        help="torque-rate limit [N m/s] (default: none)",
+    )
+    p.add_argument(
+        "--late-budget",
+        type=non_negative_int,
+        default=5,
+        metavar="N",
+        help="consecutive late cycles tolerated (5)",
+    )
+    p.add_argument(
+        "--deadline-ms",
+        type=positive_float,
+        metavar="MS",
+        help="state-to-torque deadline [ms] (half a period)",
+    )
+    p.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="save result.npz, result.csv, summary.json, run.json",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(handler=run_robot)
 
@@ -66,12 +122,19 @@ def run_robot(args) -> int:
     if args.duration is not None:
         scenario = scenario.with_overrides(duration=args.duration)
     if scenario.sample_period is None:
-        raise InputError("a robot runs sampled; the scenario is continuous-time", scenario.source, "sample_period")
+        raise InputError(
+            "a robot runs sampled; the scenario is continuous-time",
+            scenario.source,
+            "sample_period",
+        )
     setup = build(scenario)
     if args.controller is not None:
         controller = load_controller(args.controller)
         if controller.robot.dof != setup.robot.dof:
-            raise InputError(f"the controller is for {controller.robot.name}, not {setup.robot.name}", args.controller)
+            raise InputError(
+                f"the controller is for {controller.robot.name}, not {setup.robot.name}",
+                args.controller,
+            )
     else:
         options = interval_synthesis_options(scenario)
         if args.delay is not None:
@@ -114,6 +177,11 @@ def run_robot(args) -> int:
     for _ in range(3):  # first calls load compiled kernels and fill caches: not in the run
         loop.step(0.0, first.q, first.qd)
     loop.reset()
+    print(
+        f"run: connected to {args.robot_address}; running {scenario.duration + approach:g} s",
+        file=sys.stderr,
+        flush=True,
+    )
     report = run(robot, loop, safety, watchdog, scenario.duration + approach, first=first)
     summary = {
         "scenario": scenario.name,
@@ -143,10 +211,14 @@ def run_robot(args) -> int:
             info={"run": report.to_dict(), "approach_s": approach},
         )
         metrics = result.metrics
-        summary.update(met=metrics["met"], final_error=metrics["final_error"], epsilon=scenario.epsilon)
+        summary.update(
+            met=metrics["met"], final_error=metrics["final_error"], epsilon=scenario.epsilon
+        )
     if out is not None and result is not None:
         writers = result.writers()
-        writers["run.json"] = lambda path: path.write_text(json_text({**summary, "events": report.events}) + "\n")
+        writers["run.json"] = lambda path: path.write_text(
+            json_text({**summary, "events": report.events}) + "\n"
+        )
         write_files(out, writers)
     if args.json:
         print(json_text(summary))
@@ -166,7 +238,9 @@ def _print_summary(s: dict) -> None:
             f"(epsilon {s['epsilon']:g})"
         )
     if s["approach_s"]:
-        lines.append(f"  approach     {s['approach_s']:.2f} s from the arm's start to the trajectory's")
+        lines.append(
+            f"  approach     {s['approach_s']:.2f} s from the arm's start to the trajectory's"
+        )
     lines.append(
         f"  deadlines    {s['deadline_misses']} missed of {s['cycles']} cycles "
         f"({100 * s['deadline_miss_rate']:.3g} %), worst response {s['worst_response_ms']:.3g} ms, "

@@ -60,24 +60,83 @@ def register(commands) -> None:
     )
     p.add_argument("--lock", type=names, default=[], metavar="JOINTS", help=LOCK_HELP)
     p.add_argument("--port", type=_port, required=True, metavar="P", help="UDP port on 127.0.0.1")
-    p.add_argument("--period", type=positive_float, default=1e-3, metavar="S", help="robot period [s] (1e-3)")
-    p.add_argument("--delay", type=int, choices=(0, 1), default=0, help="samples of actuation delay (0)")
-    p.add_argument("--encoder-resolution", type=non_negative_float, default=0.0, metavar="R", help="position quantum [rad] (0: none)")
-    p.add_argument("--noise", type=non_negative_float, default=0.0, metavar="S", help="position noise std [rad] (0)")
+    p.add_argument(
+        "--period", type=positive_float, default=1e-3, metavar="S", help="robot period [s] (1e-3)"
+    )
+    p.add_argument(
+        "--delay", type=int, choices=(0, 1), default=0, help="samples of actuation delay (0)"
+    )
+    p.add_argument(
+        "--encoder-resolution",
+        type=non_negative_float,
+        default=0.0,
+        metavar="R",
+        help="position quantum [rad] (0: none)",
+    )
+    p.add_argument(
+        "--noise",
+        type=non_negative_float,
+        default=0.0,
+        metavar="S",
+        help="position noise std [rad] (0)",
+    )
     p.add_argument(
         "--velocity",
         choices=("measured", "difference"),
         default="measured",
         help="velocity sent: the plant's (measured), or the backward difference of the sent positions",
     )
-    p.add_argument("--loss", type=_fraction, default=0.0, metavar="P", help="probability a datagram is lost, each way (0)")
-    p.add_argument("--disturbance", type=non_negative_float, default=0.0, metavar="D", help="input disturbance ||d|| <= D [N m], drawn per period (0)")
-    p.add_argument("--seed", type=non_negative_int, default=0, metavar="N", help="seed of noise, loss, disturbance, a sampled plant")
-    p.add_argument("--q0", type=vector, metavar="Q", help="initial joint positions [rad] (default: zeros)")
-    p.add_argument("--watchdog-ms", type=positive_float, default=20.0, metavar="MS", help="brake after this long without torque [ms] (20)")
-    p.add_argument("--max-duration", type=positive_float, default=600.0, metavar="S", help="stop after this much robot time [s] (600)")
-    p.add_argument("--wait", type=positive_float, default=60.0, metavar="S", help="stop if no controller registers within S [s] (60)")
-    p.add_argument("--plant", choices=("pinocchio", "mujoco"), default="pinocchio", help="plant backend (pinocchio)")
+    p.add_argument(
+        "--loss",
+        type=_fraction,
+        default=0.0,
+        metavar="P",
+        help="probability a datagram is lost, each way (0)",
+    )
+    p.add_argument(
+        "--disturbance",
+        type=non_negative_float,
+        default=0.0,
+        metavar="D",
+        help="input disturbance ||d|| <= D [N m], drawn per period (0)",
+    )
+    p.add_argument(
+        "--seed",
+        type=non_negative_int,
+        default=0,
+        metavar="N",
+        help="seed of noise, loss, disturbance, a sampled plant",
+    )
+    p.add_argument(
+        "--q0", type=vector, metavar="Q", help="initial joint positions [rad] (default: zeros)"
+    )
+    p.add_argument(
+        "--watchdog-ms",
+        type=positive_float,
+        default=20.0,
+        metavar="MS",
+        help="brake after this long without torque [ms] (20)",
+    )
+    p.add_argument(
+        "--max-duration",
+        type=positive_float,
+        default=600.0,
+        metavar="S",
+        help="stop after this much robot time [s] (600)",
+    )
+    p.add_argument(
+        "--wait",
+        type=positive_float,
+        default=60.0,
+        metavar="S",
+        help="stop if no controller registers within S [s] (60)",
+    )
+    p.add_argument(
+        "--plant",
+        choices=("pinocchio", "mujoco"),
+        default="pinocchio",
+        help="plant backend (pinocchio)",
+    )
     p.set_defaults(handler=run_virtual_robot)
 
 
@@ -95,7 +154,8 @@ def run_virtual_robot(args) -> int:
         shipped = default_uncertainty(args.robot)
         if shipped is None:
             raise InputError(
-                f"robot '{args.robot}' has no shipped uncertainty box; give -u FILE", field="uncertainty"
+                f"robot '{args.robot}' has no shipped uncertainty box; give -u FILE",
+                field="uncertainty",
             )
         uncertainty = str(shipped)
     box = load_uncertainty(uncertainty, robot)
@@ -108,7 +168,10 @@ def run_virtual_robot(args) -> int:
     elif true == "nominal":
         point, what = {}, "nominal parameters"
     elif true == "sample":
-        point, what = sample_true_parameters(box, args.seed), f"parameters drawn from the box (seed {args.seed})"
+        point, what = (
+            sample_true_parameters(box, args.seed),
+            f"parameters drawn from the box (seed {args.seed})",
+        )
     else:
         point, what = load_parameter_point(true, robot, box), f"parameters from {true}"
     plant = box.plant(robot, point)
@@ -132,7 +195,9 @@ def run_virtual_robot(args) -> int:
             f"{1 / args.period:g} Hz, delay {args.delay}, watchdog {args.watchdog_ms:g} ms, {what})"
         )
 
-    report = serve(arm, args.port, max_duration=args.max_duration, wait_for_client=args.wait, ready=ready)
+    report = serve(
+        arm, args.port, max_duration=args.max_duration, wait_for_client=args.wait, ready=ready
+    )
     for line in report.lines():
         say(f"virtual-robot: {line.strip()}")
     return EXIT_OK
