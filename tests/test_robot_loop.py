@@ -21,9 +21,9 @@ def rr():
     return robot, box
 
 
-def lockstep(plant, controller, robot, duration, options=ArmOptions(), **safety):
+def lockstep(plant, controller, robot, duration, options=None, **safety):
     clock = FakeClock()
-    arm = VirtualArm(plant, 1e-3, options)
+    arm = VirtualArm(plant, 1e-3, options or ArmOptions())
     loop = ControlLoop(controller, urpc.PaperTrajectory())
     layer = SafetyLayer.for_robot(robot, 1e-3, **safety)
     report = run(

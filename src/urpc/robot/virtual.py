@@ -116,14 +116,14 @@ class VirtualArm:
         self,
         plant_robot,
         period: float,
-        options: ArmOptions = ArmOptions(),
+        options: ArmOptions | None = None,
         q0=None,
         qd0=None,
         backend: str = "pinocchio",
     ):
         self.robot = plant_robot
         self.period = float(period)
-        self.options = options
+        self.options = options = ArmOptions() if options is None else options
         self.dof = n = plant_robot.dof
         # Two RK4 steps per period: the plant of a 1 kHz arm in well under a period of Python.
         self.plant = make_plant(backend, plant_robot, max_step=self.period / 2)
