@@ -101,7 +101,11 @@ BAD = [
     ({"sample_period": "continuous", "disturbance": 5}, "disturbance", "per control sample"),
     ({"disturbance": -1}, "disturbance", ">= 0"),
     ({"controller": "pid"}, "controller", "valid: computed-torque, interval, r-alpha"),
-    ({"trajectory": "circle"}, "trajectory.kind", "valid: paper, quintic, sinusoid"),
+    (
+        {"trajectory": "circle"},
+        "trajectory.kind",
+        "valid: file, paper, quintic, sinusoid, waypoints",
+    ),
     ({"trajectory": {"kind": "paper", "amplitud": [1, 2]}}, "trajectory.amplitud", "amplitude"),
     ({"initial_condition": {"q": [0, 0]}}, "initial_condition.q", "valid: offset, q0, qd0"),
     (

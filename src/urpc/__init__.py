@@ -31,6 +31,18 @@ _LAZY = {
     "certify": (".control.certificate", "certify"),
     "IntervalPassivityController": (".control.interval", "IntervalPassivityController"),
     "synthesize": (".control.synthesis", "synthesize"),
+    "load_controller": (".control.controller_file", "load_controller"),
+    "ControlLoop": (".robot.loop", "ControlLoop"),
+    "SafetyLayer": (".robot.safety", "SafetyLayer"),
+    "Watchdog": (".robot.watchdog", "Watchdog"),
+    "RobotInterface": (".robot.interface", "RobotInterface"),
+    "RobotState": (".robot.interface", "RobotState"),
+    "run_on_robot": (".robot.runner", "run"),
+    "FileTrajectory": (".trajectory_sources", "FileTrajectory"),
+    "WaypointTrajectory": (".trajectory_sources", "WaypointTrajectory"),
+    "StreamedReference": (".trajectory_sources", "StreamedReference"),
+    "from_samples": (".trajectory_sources", "from_samples"),
+    "load_samples": (".trajectory_sources", "load_samples"),
     "Assembly": (".model.modular", "Assembly"),
     "assemble": (".model.modular", "assemble"),
     "load_assembly": (".model.modular", "load_assembly"),
@@ -84,6 +96,18 @@ __all__ = [
     "SimulationResult",
     "simulate",
     "synthesize",
+    "load_controller",
+    "ControlLoop",
+    "SafetyLayer",
+    "Watchdog",
+    "RobotInterface",
+    "RobotState",
+    "run_on_robot",
+    "FileTrajectory",
+    "WaypointTrajectory",
+    "StreamedReference",
+    "from_samples",
+    "load_samples",
     "assemble",
     "load_assembly",
     "load_module_library",
@@ -110,6 +134,7 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
     from .bounds import METHODS as BOUND_METHODS
     from .bounds import BoundMethod, default_method, make_bound
     from .control.certificate import Certificate, certify
+    from .control.controller_file import load_controller
     from .control.interval import IntervalPassivityController
     from .control.synthesis import synthesize
     from .model.modular import Assembly, assemble, load_assembly, load_module_library
@@ -120,6 +145,11 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
         load_uncertainty,
         parse_uncertainty,
     )
+    from .robot.interface import RobotInterface, RobotState
+    from .robot.loop import ControlLoop
+    from .robot.runner import run as run_on_robot
+    from .robot.safety import SafetyLayer
+    from .robot.watchdog import Watchdog
     from .sim.metrics import METRIC_NAMES
     from .sim.results import SimulationResult
     from .sim.simulation import simulate
@@ -132,4 +162,11 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
         Trajectory,
         generic_trajectory,
         home_configuration,
+    )
+    from .trajectory_sources import (
+        FileTrajectory,
+        StreamedReference,
+        WaypointTrajectory,
+        from_samples,
+        load_samples,
     )

@@ -299,7 +299,8 @@ class QuinticTrajectory(Trajectory):
 # ============================================================================ generic choice
 #: Largest amplitude generic trajectories use on a joint whose range is wide or unbounded.
 MAX_AMPLITUDE = {"revolute": 0.5, "continuous": 0.5, "prismatic": 0.05}  # [rad], [rad], [m]
-TRAJECTORY_KINDS = ("paper", "sinusoid", "quintic")
+#: Kinds a scenario names; ``file`` and ``waypoints`` are built by :mod:`urpc.trajectory_sources`.
+TRAJECTORY_KINDS = ("paper", "sinusoid", "quintic", "file", "waypoints")
 
 
 def home_configuration(robot: Robot) -> np.ndarray:

@@ -89,6 +89,8 @@ class IntervalPassivityController(Controller):
     """
 
     name = "interval"
+    #: Samples of actuation delay the law predicts over (:mod:`urpc.control.delay` for 1).
+    delay = 0
 
     def __init__(
         self,
@@ -148,6 +150,13 @@ class IntervalPassivityController(Controller):
             f"IntervalPassivityController({self.robot.name!r}, method={self.method!r}, "
             f"epsilon={self.epsilon:g}, {theorem}{law})"
         )
+
+    def save(self, path):
+        """Write this controller to ``path`` (JSON, :mod:`urpc.control.controller_file`);
+        :func:`urpc.load_controller` reads it back, with bit-identical torques."""
+        from .controller_file import save_controller
+
+        return save_controller(self, path)
 
     def gains(self, state: np.ndarray) -> tuple[float, float]:
         """``(phi, kappa)`` for the state ``[s]`` (Theorem 2) or the constants (Theorem 1)."""

@@ -34,6 +34,7 @@ def synthesize(
     Kr: float | Sequence[float] | np.ndarray | None = None,
     sample_period: float | None = None,
     sampled_law: str = "implicit",
+    delay: int = 0,
 ) -> IntervalPassivityController:
     """The paper's controller for ``robot`` with uncertain parameters in ``box``.
 
@@ -59,6 +60,10 @@ def synthesize(
             :mod:`urpc.control.interval` that stays stable on every plant of the box and is
             certified by :func:`urpc.certify`; ``"paper"``, the paper's law unchanged (it can
             diverge on light plants at 0.5-1 kHz).
+        delay: Samples between a state and the period its torque acts over: 0 (the ideal
+            zero-order hold) or 1 (most torque interfaces): the law then predicts one period
+            ahead (:class:`urpc.control.delay.DelayedIntervalController`); needs a
+            ``sample_period``.
 
     Raises:
         InputError: a gain or ``epsilon`` out of range (the message names the field and the valid
@@ -79,11 +84,22 @@ def synthesize(
             f"{sampled_law!r} is not a sampled law; valid: {', '.join(SAMPLED_LAWS)}",
             field="sampled_law",
         )
+    if isinstance(delay, bool) or delay not in (0, 1):
+        raise InputError(f"{delay!r} is not a delay; valid: 0, 1 [samples]", field="delay")
+    if delay and sample_period is None:
+        raise InputError(
+            "a delay needs a sample period (a delay of one sample of continuous time is "
+            "undefined); give sample_period",
+            field="delay",
+        )
     if method is None:
         method = default_method(box)
     bound = make_bound(method, robot, box)
     implicit = sample_period is not None and sampled_law == "implicit"
-    return IntervalPassivityController(
+    law = IntervalPassivityController
+    if delay:
+        from .delay import DelayedIntervalController as law
+    return law(
         bound,
         epsilon,
         kappa_P=kappa_P,

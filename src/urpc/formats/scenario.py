@@ -30,7 +30,7 @@ from .values import Count, NonNegative, Number, Positive, PositiveCount, Text, V
 ControllerName = Literal["interval", "r-alpha", "computed-torque"]
 BoundMethodName = Literal["hull", "vertex", "rigorous"]
 PlantBackend = Literal["pinocchio", "mujoco"]
-TrajectoryKind = Literal["paper", "sinusoid", "quintic"]
+TrajectoryKind = Literal["paper", "sinusoid", "quintic", "file", "waypoints"]
 #: How a sampled interval controller runs: ``implicit`` (the sampled-data law) or ``paper`` (the
 #: paper's law unchanged).
 SampledLaw = Literal["implicit", "paper"]
@@ -116,6 +116,11 @@ class IntervalOptions(FileFormat):
         "implicit",
         description="sampled runs: implicit (the sampled-data law) or paper (the paper's law "
         "unchanged)",
+    )
+    delay: Literal[0, 1] = Field(
+        0,
+        description="samples between a state and the period its torque acts over: 0, or 1 (the "
+        "law predicts one period ahead; urpc.control.delay)",
     )
 
 
@@ -241,11 +246,40 @@ class QuinticTrajectory(_Generic):
     segment_duration: Positive("s") | None = Field(None, description="[s] (2)")
 
 
+class FileTrajectory(FileFormat):
+    """Samples from a file (CSV or NPZ: ``t``, ``q`` per joint, optional ``qd``, ``qdd``),
+    interpolated C2 (:mod:`urpc.trajectory_sources`)."""
+
+    kind: Literal["file"]
+    path: _file("trajectory") = Field(description="a .csv or .npz file of samples")
+    acceleration_limit: ScalarOrVector | None = Field(
+        None, description="[rad/s^2], a number or one per joint; checked with the URDF's limits"
+    )
+
+
+class WaypointsTrajectory(FileFormat):
+    """Rest-to-rest quintic segments through waypoints, timed by the limits unless ``times``."""
+
+    kind: Literal["waypoints"]
+    points: Annotated[tuple[Vector, ...], BeforeValidator(_at_least_two)] = Field(
+        description="configurations [rad]"
+    )
+    times: Vector | None = Field(None, description="[s], one per point; default: from the limits")
+    velocity_fraction: Positive("1") | None = Field(None, description="of the URDF limit (0.5)")
+    acceleration_limit: ScalarOrVector | None = Field(None, description="[rad/s^2] (5)")
+
+
 Trajectory = _either(
-    "a kind (paper, sinusoid, quintic) or a mapping with kind and options",
+    "a kind (paper, sinusoid, quintic) or a mapping with kind and options (also file, waypoints)",
     scalar=Annotated[TrajectoryKind, BeforeValidator(_kind)],
     mapping=Annotated[
-        Union[PaperTrajectory, SinusoidTrajectory, QuinticTrajectory],  # noqa: UP007
+        Union[  # noqa: UP007
+            PaperTrajectory,
+            SinusoidTrajectory,
+            QuinticTrajectory,
+            FileTrajectory,
+            WaypointsTrajectory,
+        ],
         Field(discriminator="kind"),
     ],
 )

@@ -257,6 +257,8 @@ def _scenario(spec: schema.ScenarioFile, source: Path | None) -> Scenario:
         trajectory_spec = TrajectorySpec(trajectory)
     else:
         options = trajectory.model_dump(exclude_unset=True, exclude={"kind"})
+        if isinstance(options.get("path"), Path):  # plain data, like the other options
+            options["path"] = str(options["path"])
         trajectory_spec = TrajectorySpec(trajectory.kind, MappingProxyType(options))
     ic = spec.initial_condition
     initial = InitialCondition() if isinstance(ic, str) else InitialCondition(**dict(ic))

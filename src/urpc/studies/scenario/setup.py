@@ -209,6 +209,10 @@ def sample_true_parameters(
 def _trajectory(spec: TrajectorySpec, robot: Robot, source: str | None) -> Trajectory:
     options = dict(spec.options)
     dof = robot.dof
+    if spec.kind in ("file", "waypoints"):
+        from ...trajectory_sources import planned_trajectory
+
+        return planned_trajectory(spec.kind, options, robot, source)
     try:
         if spec.kind == "paper":
             amplitude = options.get("amplitude", (math.pi / 4, -math.pi / 8))

@@ -1,0 +1,136 @@
+"""The UDP wire format between a control loop and a (virtual) robot: two fixed-layout datagrams.
+
+Every number is little-endian. ``n`` is the number of joints (1-255).
+
+State, robot -> loop, ``24 + 16 n`` bytes::
+
+    offset  size  type      field
+    0       4     bytes     magic  b"URPS"
+    4       1     uint8     version (1)
+    5       1     uint8     n, number of joints
+    6       2     uint16    flags: bit 0 STOPPED (the robot's watchdog braked the arm; no more
+                            torque is applied), bit 1 LATE (the robot applied an old torque at
+                            the sample before this one, none having arrived in time)
+    8       4     uint32    seq, sample number, +1 per robot period (0 at the first sample)
+    12      8     float64   t, robot time of the sample [s]
+    20      4     -         reserved (0)
+    24      8 n   float64   q, joint positions [rad or m]
+    24+8n   8 n   float64   qd, joint velocities [rad/s or m/s]
+
+Torque, loop -> robot, ``16 + 8 n`` bytes::
+
+    0       4     bytes     magic  b"URPT"
+    4       1     uint8     version (1)
+    5       1     uint8     n
+    6       2     uint16    flags: bit 0 HELLO (register this address to receive the states; the
+                            torque is ignored), bit 1 STOP (end of run: brake the arm)
+    8       4     uint32    seq, the seq of the state this torque answers
+    12      4     -         reserved (0)
+    16      8 n   float64   tau, joint torques [N m or N]
+
+A datagram of the wrong size, magic, version or joint count is refused with :class:`PacketError`.
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import UrpcError
+
+VERSION = 1
+STATE_MAGIC, TORQUE_MAGIC = b"URPS", b"URPT"
+#: State flags.
+STOPPED, LATE = 1, 2
+#: Torque flags.
+HELLO, STOP = 1, 2
+
+_STATE_HEADER = struct.Struct("<4sBBHIdI")  # 24 bytes
+_TORQUE_HEADER = struct.Struct("<4sBBHII")  # 16 bytes
+MAX_JOINTS = 255
+
+
+class PacketError(UrpcError, ValueError):
+    """A datagram that is not a urpc packet of the expected kind and size."""
+
+
+@dataclass(frozen=True, eq=False)
+class StatePacket:
+    seq: int
+    t: float
+    q: np.ndarray
+    qd: np.ndarray
+    flags: int = 0
+
+    @property
+    def stopped(self) -> bool:
+        return bool(self.flags & STOPPED)
+
+
+@dataclass(frozen=True, eq=False)
+class TorquePacket:
+    seq: int
+    tau: np.ndarray
+    flags: int = 0
+
+
+def state_size(n: int) -> int:
+    return _STATE_HEADER.size + 16 * n
+
+
+def torque_size(n: int) -> int:
+    return _TORQUE_HEADER.size + 8 * n
+
+
+def _joints(n: int) -> int:
+    if not 1 <= n <= MAX_JOINTS:
+        raise PacketError(f"{n} joints; a packet carries 1 to {MAX_JOINTS}")
+    return n
+
+
+def encode_state(seq: int, t: float, q: np.ndarray, qd: np.ndarray, flags: int = 0) -> bytes:
+    n = _joints(len(q))
+    header = _STATE_HEADER.pack(STATE_MAGIC, VERSION, n, flags, seq & 0xFFFFFFFF, t, 0)
+    body = np.concatenate([q, qd]).astype("<f8", copy=False)
+    return header + body.tobytes()
+
+
+def decode_state(data: bytes, n: int) -> StatePacket:
+    """The state in ``data``, which must be a version-1 state packet of ``n`` joints."""
+    if len(data) != state_size(n):
+        raise PacketError(
+            f"state packet of {len(data)} bytes; expected {state_size(n)} for {n} joints"
+        )
+    magic, version, joints, flags, seq, t, _ = _STATE_HEADER.unpack_from(data)
+    _check(magic, STATE_MAGIC, version, joints, n)
+    body = np.frombuffer(data, dtype="<f8", offset=_STATE_HEADER.size).astype(float)
+    return StatePacket(seq, t, body[:n], body[n:], flags)
+
+
+def encode_torque(seq: int, tau: np.ndarray, flags: int = 0) -> bytes:
+    n = _joints(len(tau))
+    header = _TORQUE_HEADER.pack(TORQUE_MAGIC, VERSION, n, flags, seq & 0xFFFFFFFF, 0)
+    return header + np.asarray(tau, dtype="<f8").tobytes()
+
+
+def decode_torque(data: bytes, n: int) -> TorquePacket:
+    """The torque in ``data``, which must be a version-1 torque packet of ``n`` joints."""
+    if len(data) != torque_size(n):
+        raise PacketError(
+            f"torque packet of {len(data)} bytes; expected {torque_size(n)} for {n} joints"
+        )
+    magic, version, joints, flags, seq, _ = _TORQUE_HEADER.unpack_from(data)
+    _check(magic, TORQUE_MAGIC, version, joints, n)
+    tau = np.frombuffer(data, dtype="<f8", offset=_TORQUE_HEADER.size).astype(float)
+    return TorquePacket(seq, tau, flags)
+
+
+def _check(magic: bytes, expected: bytes, version: int, joints: int, n: int) -> None:
+    if magic != expected:
+        raise PacketError(f"magic {magic!r}; expected {expected!r}")
+    if version != VERSION:
+        raise PacketError(f"packet version {version}; this urpc speaks version {VERSION}")
+    if joints != n:
+        raise PacketError(f"packet for {joints} joints; this robot has {n}")

@@ -1,0 +1,181 @@
+"""One run on a robot: read the state, check it, step the loop, limit the torque, send it, and
+watch the deadlines, until the duration is over or something stops the run.
+
+Per cycle (``docs/robot.md``)::
+
+    state = robot.read_state(timeout)          # None: nothing arrived -> watchdog.check_silence
+    watchdog.arrived(state.seq, state.received)  # stale (not newer): ignored, counted
+    safety.check_state(t, q, qd)               # fault -> safe command, stop
+    tau = loop.step(t, q, qd)                  # the controller
+    tau, fault = safety.limit(t, tau)          # clip (counted); non-finite -> safe command, stop
+    robot.send_torque(state.seq, tau)
+    watchdog.answered(state.received, clock()) # late past the budget -> safe command, stop
+
+Loop time is ``t = (seq - seq_0) period``: a lost sample leaves a gap in time, not a shift.
+Every loop is bounded: by the number of cycles of the duration, and by the watchdog's silence
+limit while nothing arrives. The clock is a parameter (``time.monotonic`` by default), which lets
+tests drive a whole run on a fake clock.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .interface import RobotInterface, RobotState
+from .loop import ControlLoop
+from .safety import SafetyLayer
+from .watchdog import Watchdog
+
+#: How a run ended.
+ENDINGS = ("completed", "fault", "watchdog", "robot_stopped", "no_robot")
+
+
+@dataclass
+class RunReport:
+    """How a run went.
+
+    Attributes:
+        ending: One of :data:`ENDINGS`.
+        message: What stopped it (``None`` when completed).
+        cycles: Samples answered.
+        wall_time: Clock time from the first state to the end [s].
+        safety: :meth:`SafetyLayer.summary` with the first interventions.
+        watchdog: :meth:`Watchdog.summary`.
+    """
+
+    ending: str
+    message: str | None
+    cycles: int
+    wall_time: float
+    safety: dict[str, Any] = field(default_factory=dict)
+    watchdog: dict[str, Any] = field(default_factory=dict)
+    events: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return self.ending == "completed"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "ending": self.ending,
+            "message": self.message,
+            "cycles": self.cycles,
+            "wall_time": self.wall_time,
+            "safety": self.safety,
+            "watchdog": self.watchdog,
+            "events": self.events[:50],
+        }
+
+
+def run(
+    robot: RobotInterface,
+    loop: ControlLoop,
+    safety: SafetyLayer,
+    watchdog: Watchdog,
+    duration: float,
+    *,
+    clock=time.monotonic,
+    start_timeout: float = 5.0,
+    first: RobotState | None = None,
+) -> RunReport:
+    """Drive ``robot`` with ``loop`` for ``duration`` [s] of loop time, behind ``safety`` and
+    ``watchdog``; the robot is stopped (:meth:`RobotInterface.stop`) however the run ends.
+    ``first``: a state already read (its sample is the run's first)."""
+    period = loop.period
+    cycles_wanted = max(1, math.ceil(duration / period - 1e-9)) + 1
+    read_timeout = min(period, watchdog.silence)
+    try:
+        state = robot.read_state(start_timeout) if first is None else first
+        start = clock()
+        if state is None:
+            return _report(
+                "no_robot",
+                f"no state from the robot within {start_timeout:g} s",
+                0,
+                0.0,
+                safety,
+                watchdog,
+            )
+        seq0 = state.seq
+        last_qd = state.qd
+        last_seq = state.seq
+        ending, message = "completed", None
+        while watchdog.cycles < cycles_wanted:
+            if state is None:
+                if watchdog.check_silence(clock()):
+                    safety.watchdog((last_seq - seq0) * period, watchdog.message)
+                    _send_safe(robot, safety, last_seq + 1, last_qd)
+                    ending, message = "watchdog", watchdog.message
+                    break
+                state = robot.read_state(read_timeout)
+                continue
+            if state.stopped:
+                ending, message = "robot_stopped", "the robot reports that it stopped the arm"
+                break
+            t = (state.seq - seq0) * period
+            if not watchdog.arrived(state.seq, state.received):
+                safety.stale(t, f"sample {state.seq} arrived after sample {last_seq}; ignored")
+                state = robot.read_state(read_timeout)
+                continue
+            last_seq = state.seq
+            fault = safety.check_state(t, state.q, state.qd)
+            if fault is not None:
+                _send_safe(robot, safety, state.seq, state.qd)
+                ending, message = "fault", _fault_message(fault)
+                break
+            last_qd = state.qd
+            tau = loop.step(t, state.q, state.qd)
+            sent, fault = safety.limit(t, tau)
+            robot.send_torque(state.seq, sent)
+            loop.record_sent(sent, safety.clipped or fault is not None)
+            if fault is not None:
+                ending, message = "fault", _fault_message(fault)
+                break
+            watchdog.answered(state.received, clock())
+            if watchdog.tripped:
+                safety.watchdog(t, watchdog.message)
+                _send_safe(robot, safety, state.seq, state.qd)
+                ending, message = "watchdog", watchdog.message
+                break
+            if watchdog.cycles >= cycles_wanted:
+                break
+            state = robot.read_state(read_timeout)
+        return _report(ending, message, watchdog.cycles, clock() - start, safety, watchdog)
+    finally:
+        robot.stop()
+
+
+def _send_safe(robot: RobotInterface, safety: SafetyLayer, seq: int, qd: np.ndarray) -> None:
+    robot.send_torque(seq, safety.safe_command(qd))
+
+
+def _fault_message(fault) -> str:
+    what = {
+        "non_finite_state": "non-finite state",
+        "position_limit": "position limit",
+        "velocity_limit": "velocity limit",
+        "non_finite_torque": "the controller returned a non-finite torque",
+    }[fault.kind]
+    return f"{what} at t = {fault.t:.4f} s: {fault.detail}; safe command sent, run stopped"
+
+
+def _report(
+    ending, message, cycles, wall_time, safety: SafetyLayer, watchdog: Watchdog
+) -> RunReport:
+    return RunReport(
+        ending,
+        message,
+        cycles,
+        wall_time,
+        safety.summary(),
+        watchdog.summary(),
+        [event.to_dict() for event in safety.events],
+    )
+
+
+__all__ = ["ENDINGS", "RobotState", "RunReport", "run"]

@@ -1,0 +1,131 @@
+"""The control loop in lock step with the virtual arm (no wall clock): it tracks like the
+simulator, its log saves like simulate's, a NaN state stops it, and the delayed law meets epsilon
+on vertex plants of the box with a one-sample delay."""
+
+import numpy as np
+import pytest
+
+import urpc
+from urpc.robot.loop import ControlLoop
+from urpc.robot.runner import run
+from urpc.robot.safety import SafetyLayer
+from urpc.robot.virtual import ArmOptions, FakeClock, LockstepRobot, VirtualArm
+from urpc.robot.watchdog import Watchdog
+from urpc.sim.results import SimulationResult
+
+
+@pytest.fixture(scope="module")
+def rr():
+    robot = urpc.load_robot("rr_planar")
+    box = urpc.load_uncertainty("rr_planar", robot)
+    return robot, box
+
+
+def lockstep(plant, controller, robot, duration, options=None, **safety):
+    clock = FakeClock()
+    arm = VirtualArm(plant, 1e-3, options or ArmOptions())
+    loop = ControlLoop(controller, urpc.PaperTrajectory())
+    layer = SafetyLayer.for_robot(robot, 1e-3, **safety)
+    report = run(
+        LockstepRobot(arm, clock, 1e-4), loop, layer, Watchdog(1e-3), duration, clock=clock
+    )
+    return report, loop, layer
+
+
+def test_loop_matches_the_sampled_simulator(rr):
+    robot, box = rr
+    plant = box.plant(robot, urpc.load_parameter_point("rr_planar", robot, box))
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
+    report, loop, _ = lockstep(plant, controller, robot, 0.5)
+    assert report.ok and report.cycles == 501
+    simulated = urpc.simulate(
+        plant, controller, urpc.PaperTrajectory(), duration=0.5, q0=np.zeros(2), sample_period=1e-3
+    )
+    logged = loop.series()
+    # Same law, same plant; the arm integrates with 2 RK4 steps per period, the simulator 10.
+    assert np.max(np.abs(logged["q"] - simulated.q)) < 1e-6
+    assert np.max(np.abs(logged["torque"] - simulated.torque)) < 1e-2 * np.max(
+        np.abs(simulated.torque)
+    )
+
+
+def test_log_saves_like_simulate(rr, tmp_path):
+    robot, box = rr
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
+    report, loop, layer = lockstep(box.plant(robot, {}), controller, robot, 0.2)
+    result = loop.result(scenario="lockstep", torque_limit=layer.torque_limit)
+    result.save(tmp_path)
+    back = SimulationResult.load(tmp_path)
+    assert np.array_equal(back.q, loop.series()["q"]) and back.sample_period == 1e-3
+    assert {"p50", "p99", "p99_9", "max"} <= set(result.info["step_time"])
+    assert loop.last["rho_norm"] > 0 and np.isfinite(loop.last["phi"])
+    loop.reset()
+    assert loop.samples == 0 and np.array_equal(loop.state, controller.initial_state())
+
+
+def test_torque_above_the_limit_is_clipped_before_the_arm(rr):
+    robot, box = rr
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
+    report, loop, layer = lockstep(
+        box.plant(robot, {}), controller, robot, 0.3, torque_limit=[60.0, 20.0]
+    )
+    series = loop.series()
+    assert layer.counts["torque_limit"] > 0
+    assert np.all(np.abs(series["torque_sent"]) <= [60.0, 20.0])
+    assert np.any(np.abs(series["torque"]) > [60.0, 20.0])
+    assert int(series["clipped"].sum()) == layer.counts["torque_limit"]
+
+
+def test_nan_state_stops_the_loop_with_one_message(rr):
+    robot, box = rr
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
+
+    class Broken(LockstepRobot):
+        def read_state(self, timeout):
+            state = super().read_state(timeout)
+            if state.seq == 30:
+                state.q[1] = np.nan
+            return state
+
+    clock = FakeClock()
+    arm = VirtualArm(box.plant(robot, {}), 1e-3)
+    loop = ControlLoop(controller, urpc.PaperTrajectory())
+    layer = SafetyLayer.for_robot(robot, 1e-3)
+    report = run(Broken(arm, clock, 1e-4), loop, layer, Watchdog(1e-3), 1.0, clock=clock)
+    assert report.ending == "fault" and report.cycles == 30
+    assert report.message.startswith("non-finite state at t = 0.0300 s")
+    assert layer.counts["non_finite_state"] == 1 and arm.braked
+
+
+def test_delayed_law_state_and_save(rr, tmp_path):
+    robot, box = rr
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3, delay=1)
+    assert controller.delay == 1 and controller.n_states == 3
+    with pytest.raises(urpc.InputError, match="valid: 0, 1"):
+        urpc.synthesize(robot, box, 1e-2, sample_period=1e-3, delay=2)
+    controller.save(tmp_path / "c.json")
+    loaded = urpc.load_controller(tmp_path / "c.json")
+    reference = urpc.PaperTrajectory().reference(0.7)
+    state = np.array([0.01, 3.0, -4.0])
+    q = reference.q + 0.004
+    assert np.array_equal(
+        controller.output(0.7, q, reference.qd, reference, state),
+        loaded.output(0.7, q, reference.qd, reference, state),
+    )
+    advanced = controller.advance(0.7, q, reference.qd, reference, state, 1e-3)
+    assert np.array_equal(advanced[1:], controller.output(0.7, q, reference.qd, reference, state))
+
+
+@pytest.mark.parametrize("side", ["lower", "upper"])
+def test_delayed_law_meets_epsilon_on_vertex_plants_with_a_one_sample_delay(rr, side):
+    """Vertex plants of Table I (the lightest and the heaviest link 2) behind a one-sample delay,
+    with a 10 N m disturbance: the delayed law meets epsilon = 1e-2 by the last quarter."""
+    robot, box = rr
+    link = box.uncertain_links[0]
+    point = {link.link: np.array(getattr(link, side), dtype=float)}
+    plant = box.plant(robot, point)
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3, delay=1)
+    report, loop, _ = lockstep(plant, controller, robot, 2.0, ArmOptions(delay=1, disturbance=10.0))
+    assert report.ok
+    metrics = loop.result().metrics
+    assert metrics["met"], metrics["final_error"]

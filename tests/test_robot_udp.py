@@ -1,0 +1,116 @@
+"""Wall-clock runs against the virtual robot process over UDP on 127.0.0.1: short, with lenient
+deadlines (a loaded 2-core machine must not fail them; real-time figures are the benchmark's)."""
+
+import json
+import re
+import subprocess
+import sys
+import time
+
+URPC = [sys.executable, "-m", "urpc"]
+
+
+def start_robot(*options):
+    process = subprocess.Popen(
+        [
+            *URPC,
+            "virtual-robot",
+            "rr_planar",
+            "--port",
+            "0",
+            "--wait",
+            "60",
+            "--max-duration",
+            "60",
+            *options,
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    line = process.stdout.readline()
+    match = re.search(r"ready on udp://127\.0\.0\.1:(\d+)", line)
+    assert match, line + process.stderr.read()
+    return process, int(match.group(1))
+
+
+def finish(process, timeout=60):
+    out, err = process.communicate(timeout=timeout)
+    return out, err
+
+
+LENIENT = ["--late-budget", "100000", "--deadline-ms", "50"]
+
+
+def test_run_meets_epsilon_against_the_virtual_robot():
+    robot, port = start_robot()
+    try:
+        done = subprocess.run(
+            [
+                *URPC,
+                "run",
+                "rr_planar/s3_ic1",
+                "--robot-address",
+                f"udp://127.0.0.1:{port}",
+                "--duration",
+                "1.5",
+                "--json",
+                *LENIENT,
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+    finally:
+        out, _ = finish(robot)
+    summary = json.loads(done.stdout)
+    assert done.returncode == 0, done.stderr
+    assert summary["ending"] == "completed" and summary["met"], summary
+    assert summary["cycles"] >= 1000  # samples lost under load leave gaps, not extra cycles
+    assert (
+        "deadline_misses" in summary
+        and summary["safety_interventions"] == summary["interventions"]["torque_limit"]
+    )
+    assert "stopped on request of the controller" in out
+
+
+def test_killing_the_loop_makes_the_robot_brake():
+    robot, port = start_robot()
+    loop = subprocess.Popen(
+        [
+            *URPC,
+            "run",
+            "rr_planar/s3_ic1",
+            "--robot-address",
+            f"udp://127.0.0.1:{port}",
+            "--duration",
+            "30",
+            *LENIENT,
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert loop.stderr.readline().startswith("run: connected to")
+        time.sleep(0.5)  # a few hundred cycles
+        loop.kill()
+        loop.wait(timeout=10)
+        out, _ = finish(robot)
+    finally:
+        if loop.poll() is None:
+            loop.kill()
+    assert "stopped by watchdog: no torque for" in out, out
+    latency = float(re.search(r"arm braked ([\d.]+) ms after the last torque", out).group(1))
+    assert latency >= 20.0 and latency < 250.0  # 20 ms plus at most a few late ticks under load
+
+
+def test_no_robot_is_one_error_line():
+    done = subprocess.run(
+        [*URPC, "run", "rr_planar/s3_ic1", "--robot-address", "udp://10.1.2.3:5000"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 2 and done.stderr.startswith("error:") and "loopback" in done.stderr
+    assert "Traceback" not in done.stderr

@@ -1,0 +1,116 @@
+"""The watchdogs on both sides, on a fake clock: the loop's late-cycle budget and silence limit,
+the virtual arm's 20 ms torque timeout, and whole runs stopped by them."""
+
+import numpy as np
+import pytest
+
+import urpc
+from urpc.robot.loop import ControlLoop
+from urpc.robot.runner import run
+from urpc.robot.safety import SafetyLayer
+from urpc.robot.virtual import FakeClock, LockstepRobot, VirtualArm
+from urpc.robot.watchdog import Watchdog
+
+
+def test_trips_at_the_budget_not_before():
+    dog = Watchdog(1e-3, late_budget=3)  # deadline 0.5 ms
+    for k in range(3):
+        assert dog.arrived(k, k * 1e-3)
+        assert dog.answered(k * 1e-3, k * 1e-3 + 0.6e-3)
+        assert not dog.tripped
+    dog.arrived(3, 3e-3)
+    dog.answered(3e-3, 3e-3 + 0.4e-3)  # on time: the run of late cycles restarts
+    for k in range(4, 7):
+        dog.arrived(k, k * 1e-3)
+        dog.answered(k * 1e-3, k * 1e-3 + 0.6e-3)
+    assert not dog.tripped and dog.consecutive == 3
+    dog.arrived(7, 7e-3)
+    dog.answered(7e-3, 7e-3 + 0.6e-3)
+    assert dog.tripped and "4 consecutive late cycles (budget 3)" in dog.message
+    assert dog.late_cycles == 7 and dog.cycles == 8
+
+
+def test_lost_and_stale_samples():
+    dog = Watchdog(1e-3)
+    assert dog.arrived(10, 0.0) and dog.arrived(13, 0.003)
+    assert not dog.arrived(12, 0.0031)  # older than the newest: stale
+    assert dog.lost_samples == 2
+
+
+def test_silence():
+    dog = Watchdog(1e-3, silence=0.01)
+    assert not dog.check_silence(5.0)  # nothing heard yet: not armed
+    dog.arrived(0, 1.0)
+    assert not dog.check_silence(1.0099)
+    assert dog.check_silence(1.0101) and "no state" in dog.message
+
+
+@pytest.fixture(scope="module")
+def rr():
+    robot = urpc.load_robot("rr_planar")
+    box = urpc.load_uncertainty("rr_planar", robot)
+    plant = box.plant(robot, urpc.load_parameter_point("rr_planar", robot, box))
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
+    return robot, plant, controller
+
+
+def test_arm_watchdog_brakes_after_20_ms_without_torque(rr):
+    robot, plant, _ = rr
+    arm = VirtualArm(plant, 1e-3)
+    arm.check_watchdog(1.0)
+    assert not arm.braked  # not armed before the first torque
+    arm.receive(1.0, 0, robot.g(np.zeros(2)))
+    arm.advance()
+    assert not arm.check_watchdog(1.0 + 0.0199)
+    assert arm.check_watchdog(1.0 + 0.0201)
+    assert "stopped by watchdog: no torque for 20.1 ms" in arm.stop_reason
+    q = arm.state.q
+    arm.receive(1.03, 1, np.full(2, 500.0))  # ignored once braked
+    arm.advance()
+    assert np.array_equal(arm.state.q, q) and np.all(arm.state.qd == 0)
+
+
+def run_lockstep(rr, response_time, **watchdog):
+    robot, plant, controller = rr
+    clock = FakeClock()
+    arm = VirtualArm(plant, 1e-3)
+    lockstep = LockstepRobot(arm, clock, response_time)
+    loop = ControlLoop(controller, urpc.PaperTrajectory())
+    safety = SafetyLayer.for_robot(robot, 1e-3, safe_mode="zero")
+    report = run(lockstep, loop, safety, Watchdog(1e-3, **watchdog), 1.0, clock=clock)
+    return report, loop, safety, arm
+
+
+def test_a_stalling_loop_is_stopped_by_its_watchdog_with_the_safe_command(rr):
+    # On time for 100 cycles, then every answer takes 0.8 ms (deadline 0.5 ms).
+    report, loop, safety, arm = run_lockstep(
+        rr, lambda seq: 1e-4 if seq < 100 else 8e-4, late_budget=5
+    )
+    assert report.ending == "watchdog" and "6 consecutive late cycles" in report.message
+    assert report.cycles == 106 and safety.counts["watchdog"] == 1
+    assert np.array_equal(safety.last_torque, np.zeros(2))  # the safe command was the last one
+    assert arm.braked  # robot.stop() after the fault
+
+
+def test_a_silent_robot_trips_the_loop(rr):
+    class Silent(LockstepRobot):
+        def read_state(self, timeout):
+            if self.arm.seq >= 50:
+                self.clock.advance(timeout)
+                return None
+            return super().read_state(timeout)
+
+    robot, plant, controller = rr
+    clock = FakeClock()
+    silent = Silent(VirtualArm(plant, 1e-3), clock, 1e-4)
+    loop = ControlLoop(controller, urpc.PaperTrajectory())
+    report = run(
+        silent,
+        loop,
+        SafetyLayer.for_robot(robot, 1e-3),
+        Watchdog(1e-3, silence=0.01),
+        1.0,
+        clock=clock,
+    )
+    assert report.ending == "watchdog" and "no state from the robot" in report.message
+    assert report.cycles == 51  # samples 0..50, then silence
