@@ -243,7 +243,7 @@ def test_a_trajectory_without_a_jerk_bound_is_refused_with_the_fix(rr, rr_box):
             return np.sin(t) * np.ones(2), np.cos(t) * np.ones(2), -np.sin(t) * np.ones(2)
 
     controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=1e-4)
-    with pytest.raises(NotImplementedError, match="jerk_bound"):
+    with pytest.raises(urpc.InputError, match="jerk_bound"):
         certify(controller, Mine(), duration=1.0, disturbance_bound=1.0)
 
 

@@ -133,6 +133,54 @@ class FileTrajectory(Trajectory):
     def duration(self) -> float:
         return float(self.t[-1] - self.t[0])
 
+    def _ends_at_rest(self) -> bool:
+        ends = np.array([self.t[0], self.t[-1]])
+        return bool(
+            np.all(np.abs(self._velocity(ends)) <= 1e-9)
+            and np.all(np.abs(self._acceleration(ends)) <= 1e-9)
+        )
+
+    def jerk_bound(self, start, stop):
+        """``|d^3 q_d / dt^3|`` over ``[start, stop]``: the third derivative of the spline is a
+        spline whose value on each knot span lies in the convex hull of that span's coefficients
+        (B-spline and Bernstein forms alike), so ``max |coefficient|`` of the span bounds it; the
+        largest over the spans that meet the interval (zero outside the samples, where the
+        reference holds its end at rest)."""
+        from scipy.interpolate import BPoly
+
+        if not hasattr(self, "_jerk_pieces"):
+            third = self._spline.derivative(3)
+            if isinstance(third, BPoly):
+                breaks, bound = third.x, np.abs(third.c).max(axis=0)  # (pieces, dof)
+            else:  # BSpline of degree k: span [t_i, t_i+1] uses coefficients i - k .. i
+                k, knots, c = third.k, third.t, np.abs(third.c)
+                spans = range(k, len(knots) - k - 1)
+                breaks = np.array([knots[i] for i in spans] + [knots[len(knots) - k - 1]])
+                bound = np.array([c[i - k : i + 1].max(axis=0) for i in spans])
+            self._jerk_pieces = (np.asarray(breaks), np.asarray(bound) * (1 + 1e-12))
+        breaks, bound = self._jerk_pieces
+        start, stop = np.asarray(start, dtype=float), np.asarray(stop, dtype=float)
+        outside = bool(np.any(start < self.t[0]) or np.any(stop > self.t[-1]))
+        if outside and not self._ends_at_rest():
+            raise InputError(
+                f"the trajectory of {self.source or 'samples'} does not start and end at rest "
+                "(velocity or acceleration not zero at its first or last sample), so holding "
+                "its end is not twice continuously differentiable: certify it within "
+                f"[{self.t[0]:g}, {self.t[-1]:g}] s",
+                source=self.source,
+                field="duration",
+            )
+        result = np.zeros(start.shape + (self.dof,))
+        last = len(breaks) - 2
+        for index in np.ndindex(start.shape):
+            a, b = max(start[index], self.t[0]), min(stop[index], self.t[-1])
+            if a > b:
+                continue
+            first = int(np.clip(np.searchsorted(breaks, a, side="right") - 1, 0, last))
+            final = int(np.clip(np.searchsorted(breaks, b, side="left") - 1, first, last))
+            result[index] = bound[first : final + 1].max(axis=0)
+        return result
+
     def __repr__(self) -> str:
         return f"FileTrajectory({len(self.t)} samples, dof={self.dof}, t=[{self.t[0]:g}, {self.t[-1]:g}] s)"
 

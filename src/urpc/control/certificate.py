@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import InputError
 from ..trajectories import Trajectory
 from .cells import CellFloor
 from .interval import IntervalPassivityController
@@ -128,6 +129,10 @@ def certify(
         )  # fmt: skip
     d = math.nan if d is None else d
     floor_of = CellFloor(controller, trajectory, duration, cells=cells)
+    try:
+        floor_of.trajectory.jerk_bound(np.zeros(1), np.full(1, float(duration)))
+    except NotImplementedError as exc:
+        raise InputError(str(exc), field="trajectory") from None
     figures: dict[str, Any] = {}
     max_period = 0.0
     if controller.sample_period is None:

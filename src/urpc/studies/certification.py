@@ -37,7 +37,11 @@ def certificate_fields(setup, controller: Controller) -> dict[str, Any]:
     if not isinstance(controller, IntervalPassivityController):
         why = f"not certified: the {controller.name} controller carries no guarantee (only interval does)"
         return {"certified": False, "certificate": None, "not_certified": why}
-    certificate = certify_setup(setup, controller)
+    try:
+        certificate = certify_setup(setup, controller)
+    except (NotImplementedError, InputError) as exc:  # a reference the certificate cannot bound
+        why = f"not certified: {exc}"
+        return {"certified": False, "certificate": None, "not_certified": why}
     return {
         "certified": certificate.certified,
         "certificate": certificate.to_dict(),
