@@ -299,9 +299,9 @@ def test_the_certificate_counts_the_joint_terms(rr, rr_box):
     )
     floors = []
     for box in (rr_box, drives):
-        controller = urpc.synthesize(rr, box, epsilon=1e-2, sample_period=1e-3)
+        controller = urpc.synthesize(rr, box, epsilon=1e-2, sample_period=5e-4)
         certificate = urpc.certify(
-            controller, urpc.PaperTrajectory(), duration=10.0, disturbance_bound=1.0
+            controller, urpc.PaperTrajectory(), duration=4.0, disturbance_bound=1.0
         )
         floors.append(certificate.epsilon_floor)
     assert np.isfinite(floors[1]) and floors[1] > floors[0]

@@ -4,20 +4,21 @@ tracking guarantee holds, and which condition fails when it does not.
 Continuous time: the gain conditions of Theorems 1-2 of the paper (Theorem 2: any ``epsilon``;
 Theorem 1: ``||r|| <= sqrt(lambda_max / lambda_min) / kappa_P``). Under a zero-order hold of period
 ``T`` with the implicit law of :mod:`urpc.control.interval`: the discrete-time argument of
-``docs/sampled-data.md``, computed by :mod:`urpc.control.sampled_floor`. In the metric of the true
-inertia, with the held loop's equilibrium ``r* = T M_L^-1 w + w / D`` for a frozen mismatch and
-``r = r* + delta``::
+``docs/sampled-data.md`` §2, every quantity bounded over cells of time, the tube and the box by
+:mod:`urpc.control.cells`. In the metric of the true inertia, with the held loop's equilibrium
+``r* = T M_L^-1 w + w / D`` for a frozen mismatch and ``r = r* + r_d + delta``::
 
-    ||delta+||_M <= (1 - a + b) ||delta||_M + f + b ||r*||_M
-    a = beta D T / (D T + beta lambda_U)               contraction of the implicit feedback
-    b = T (K (1/2 + nu) + (1 + nu) Gamma v)             Kr and Coriolis terms, proportional to r
-    f = T d / sqrt(lambda_L) + sqrt(lambda_U) T |dr*/dt| T    disturbance, motion of r*
+    ||delta+||_M <= (1 - a + b) ||delta||_M + f + b (||r*||_M + ||r_d||_M)
+    a = beta D T / (D T + beta lambda_U)        contraction of the implicit feedback
+    b = T (K (1/2 + nu) + Gamma + Gamma_Delta + Dv / lambda_L) + T mu / 2
+                                                 Kr, Coriolis, Coriolis mismatch, damping, metric
+    f = sqrt(lambda_U) T ||dr*/dt||               motion of r* within a period
+    ||r_d|| <= T d tr((T K)^-1)                   the disturbance, any sequence ||d_k|| <= d
 
-Once the adaptive gain reaches its ceiling ``phi_max`` (it does while ``||e|| >= epsilon``),
-``||e|| <= ||r|| / min(Kr) =: epsilon_floor`` ultimately. A run ends below
-``max(epsilon, epsilon_floor)``; the configuration is certified when ``epsilon_floor <= epsilon``
-and every condition holds. The inertia bounds and the mismatch over the box are sound at every
-grid point; the rest is evaluated on the grid (not an interval proof between grid points).
+Once the adaptive gain reaches its ceiling ``phi_max`` (it does while ``||e|| >= epsilon``, for at
+most ``s_max / epsilon`` seconds), ``||e|| <= ||r|| / min(Kr) =: epsilon_floor`` ultimately. A run
+ends below ``max(epsilon, epsilon_floor)``; the configuration is certified when
+``epsilon_floor <= epsilon`` and every condition holds.
 """
 
 from __future__ import annotations
