@@ -31,6 +31,7 @@ _LAZY = {
     "certify": (".control.certificate", "certify"),
     "IntervalPassivityController": (".control.interval", "IntervalPassivityController"),
     "synthesize": (".control.synthesis", "synthesize"),
+    "identify": (".identify", "identify"),
     "Assembly": (".model.modular", "Assembly"),
     "assemble": (".model.modular", "assemble"),
     "load_assembly": (".model.modular", "load_assembly"),
@@ -72,6 +73,7 @@ __all__ = [
     "SimulationResult",
     "simulate",
     "synthesize",
+    "identify",
     "assemble",
     "load_assembly",
     "load_module_library",
@@ -100,6 +102,7 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
     from .control.certificate import Certificate, certify
     from .control.interval import IntervalPassivityController
     from .control.synthesis import synthesize
+    from .identify import identify
     from .model.modular import Assembly, assemble, load_assembly, load_module_library
     from .model.robot import Robot, load_robot
     from .model.uncertainty import (

@@ -14,10 +14,10 @@ import warnings
 from collections.abc import Sequence
 
 from ..errors import UrpcError
-from . import bench, campaign, certify, demo, init, inspect, simulate
+from . import bench, campaign, certify, demo, identify, init, inspect, simulate
 from .common import EXIT_INPUT, EXIT_OK, Parser, one_line
 
-COMMAND_MODULES = [inspect, init, simulate, certify, demo, campaign, bench]
+COMMAND_MODULES = [inspect, init, identify, simulate, certify, demo, campaign, bench]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -29,6 +29,7 @@ from ..model.joint_dynamics import JOINT_FIELDS
 from ..model.parameter_box import ParameterBox
 from ..model.robot import Robot
 from .data import DerivativeBounds, Samples, load_samples
+from .lp import InfeasibleData
 from .problem import COM, INERTIA_C, LinkBounds, Problem
 
 #: Parameter groups of the width report.
@@ -262,10 +263,14 @@ def identify(
         )
     solves = 0
     ranges: dict = {}
-    for round_index in range(rounds):
-        polytope = problem.polytope()
-        ranges = _round(problem, polytope, final=round_index == rounds - 1, standard=standard_parameters)
-        solves += polytope.solves
+    try:
+        for round_index in range(rounds):
+            polytope = problem.polytope()
+            final = round_index == rounds - 1
+            ranges = _round(problem, polytope, final=final, standard=standard_parameters)
+            solves += polytope.solves
+    except InfeasibleData as exc:  # name the data
+        raise InfeasibleData(exc.detail, source=sources, field="torque_noise") from None
     fields = _fields(problem, ranges)
     rank = _rank(problem)
     result = Identification(

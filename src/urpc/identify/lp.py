@@ -63,9 +63,9 @@ class Polytope:
         self.radius = 0.5 * (upper - lower)
         self.free = np.flatnonzero(self.radius > 0)
         R = self.radius[self.free]
-        self._A_ub, self._b_ub = self._scaled(self.A_ub, self.b_ub, R, normalize=True)
+        self._A_ub, self._b_ub = self._scaled(self.A_ub, self.b_ub, R, inequality=True)
         always = int(np.sum(self._kept[: self.always])) if self.b_ub.size else 0
-        self._A_eq, self._b_eq = self._scaled(self.A_eq, self.b_eq, R, normalize=True)
+        self._A_eq, self._b_eq = self._scaled(self.A_eq, self.b_eq, R, inequality=False)
         self.solves = 0
         #: Rows in the programs solved so far (grown by :meth:`_cutting`); shared by all bounds.
         self._active = np.zeros(self._A_ub.shape[0], dtype=bool)
@@ -73,27 +73,35 @@ class Polytope:
 
     _kept = np.zeros(0, dtype=bool)
 
-    def _scaled(self, A, b, R, normalize):
+    def _scaled(self, A, b, R, inequality: bool):
+        """Rows in the scaled variables, each divided by its largest coefficient. Inequality rows
+        that hold on the whole variable box (``b >= sum |A_row|``: most data rows, and rows whose
+        coefficients are rounding noise) are dropped; one that no point of the box satisfies
+        means the data contradict the prior."""
         A = np.asarray(A, float).reshape(-1, self.center.size)
         b = np.asarray(b, float).reshape(-1) - A @ self.center
         A = A[:, self.free] * R
-        if normalize and A.shape[0]:
+        keep = np.ones(A.shape[0], dtype=bool)
+        if A.shape[0]:
+            reach = np.sum(np.abs(A), axis=1)
+            if inequality:
+                if np.any(b < -reach - 1e-9 * (1 + np.abs(b))):
+                    raise InfeasibleData(
+                        "no parameter vector in the prior box explains the data within the "
+                        "noise bound: the noise bound is too small, the prior box too narrow, "
+                        "or the data do not belong to this robot (joint order, units, torque "
+                        "sign)",
+                        field="torque_noise",
+                    )
+                keep = b < reach
+            else:
+                keep = reach > 0
             scale = np.max(np.abs(A), axis=1)
-            # A row without free variables is a check on constants only.
-            constant = scale == 0
-            if np.any(constant & (b < -1e-9 * (1 + np.abs(b)))):
-                raise InfeasibleData(
-                    "the data contradict the exactly known parameters within the noise bound: "
-                    "the noise bound is too small, or the data do not belong to this robot "
-                    "(joint order, units, torque sign)",
-                    field="torque_noise",
-                )
-            scale[constant] = 1.0
+            scale[~keep] = 1.0
             A, b = A / scale[:, None], b / scale
-            keep = ~constant
+        if inequality:
             self._kept = keep
-            return A[keep], b[keep]
-        return A, b
+        return A[keep], b[keep]
 
     def _solve(self, cost: np.ndarray, A_ub, b_ub, A_eq, b_eq, bounds, what: str):
         self.solves += 1
@@ -106,6 +114,17 @@ class Polytope:
             bounds=bounds,
             method="highs",
         )
+        if result.status == 2:  # confirm without presolve (it can misjudge near-degenerate rows)
+            result = linprog(
+                cost,
+                A_ub=A_ub if A_ub.shape[0] else None,
+                b_ub=b_ub if A_ub.shape[0] else None,
+                A_eq=A_eq if A_eq.shape[0] else None,
+                b_eq=b_eq if A_eq.shape[0] else None,
+                bounds=bounds,
+                method="highs",
+                options={"presolve": False},
+            )
         if result.status == 2:
             raise InfeasibleData(
                 "no parameter vector in the prior box explains the data within the noise bound: "

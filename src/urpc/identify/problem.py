@@ -75,9 +75,13 @@ def _add(*intervals):
     return sum(i[0] for i in intervals), sum(i[1] for i in intervals)
 
 
-def _outward(interval, scale=1.0):
+def _outward(interval):
+    """An interval computed in floating point, widened for its rounding (relative 1e-12); an
+    exact zero (a product with an exactly known zero) stays exact."""
     lo, hi = interval
-    slack = 1e-12 * (abs(lo) + abs(hi) + scale) + 1e-300
+    if lo == hi == 0.0:
+        return 0.0, 0.0
+    slack = 1e-12 * (abs(lo) + abs(hi)) + 1e-300
     return lo - slack, hi + slack
 
 
