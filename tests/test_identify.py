@@ -117,7 +117,9 @@ def test_standard_parameters_against_brute_force_one_unknown(rr):
 
 
 # ============================================================================ coverage
-@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(seed=st.integers(0, 2**31 - 1), noise=st.floats(0.05, 2.0))
 def test_coverage_over_random_plants_and_noise(rr, seed, noise):
     """The RR arm's shipped box (Table I): random rigid plants of the box, random noise within the
@@ -131,7 +133,9 @@ def test_coverage_over_random_plants_and_noise(rr, seed, noise):
     assert result.width_ratios()["mass"] < 0.5
 
 
-@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(seed=st.integers(0, 2**31 - 1))
 def test_coverage_with_drives(rr, seed):
     """Armature, viscous and Coulomb friction unknown with the link: truth inside, each drive

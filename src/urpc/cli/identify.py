@@ -191,14 +191,15 @@ def run_identify(args) -> int:
     for group, ratio in result.mean_width_ratios().items():
         print(f"  {group}: mean width {100 * ratio:.3g} % of the prior")
     if result.unconstrained:
-        print("  not constrained by the data (prior interval kept): " + ", ".join(result.unconstrained))
+        print(
+            "  not constrained by the data (prior interval kept): "
+            + ", ".join(result.unconstrained)
+        )
     if result.nominal_assumed:
         print(
-            file=sys.stderr,
-            *[
             "warning: payload mode took these at their nominal values (the payload box is sound "
-            "only if they are): " + ", ".join(result.nominal_assumed)
-            ],
+            "only if they are): " + ", ".join(result.nominal_assumed),
+            file=sys.stderr,
         )
     print(f"next: urpc check {args.robot} --uncertainty {out}")
     return EXIT_OK

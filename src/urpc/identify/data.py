@@ -204,9 +204,7 @@ def _estimated(source, t, q, qd, tau, bounds: DerivativeBounds) -> Samples:
     steps = np.diff(t)
     h = float(np.mean(steps))
     if not h > 0 or np.any(steps <= 0):
-        raise InputError(
-            "t must increase from sample to sample", source=source, field="t"
-        )
+        raise InputError("t must increase from sample to sample", source=source, field="t")
     if np.max(np.abs(steps - h)) > 1e-6 * h:
         raise InputError(
             f"{what} are estimated by central differences, which need a uniform time step; "
@@ -285,7 +283,9 @@ def read_columns(path: Path) -> dict[str, np.ndarray]:
     header = [name.strip() for name in rows[0]]
     duplicates = sorted({n for n in header if header.count(n) > 1})
     if duplicates:
-        raise InputError(f"column '{duplicates[0]}' appears twice", source=source, field=duplicates[0])
+        raise InputError(
+            f"column '{duplicates[0]}' appears twice", source=source, field=duplicates[0]
+        )
     values = np.full((len(rows) - 1, len(header)), np.nan)
     for r, row in enumerate(rows[1:], start=2):
         if len(row) != len(header):

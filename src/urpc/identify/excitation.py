@@ -120,7 +120,9 @@ def regressor_columns(robot: Robot, payload: str | None) -> tuple[np.ndarray | N
     return B, [f"payload@{payload}.{f}" for f in BARYCENTRIC_FIELDS]
 
 
-def stacked_regressor(robot: Robot, trajectory: Trajectory, times: np.ndarray, B=None) -> np.ndarray:
+def stacked_regressor(
+    robot: Robot, trajectory: Trajectory, times: np.ndarray, B=None
+) -> np.ndarray:
     """Rows of Pinocchio's joint torque regressor at the trajectory's samples, stacked."""
     model, data = robot.model, robot.model.createData()
     q, qd, qdd = trajectory.evaluate(np.asarray(times, dtype=float))

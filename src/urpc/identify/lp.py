@@ -201,9 +201,7 @@ class Polytope:
         def homogeneous(A, b):
             return np.column_stack([A, -b]), np.zeros(A.shape[0])
 
-        A_eq = np.vstack(
-            [np.column_stack([self._A_eq, -self._b_eq]), np.append(G, g0)[None, :]]
-        )
+        A_eq = np.vstack([np.column_stack([self._A_eq, -self._b_eq]), np.append(G, g0)[None, :]])
         b_eq = np.zeros(A_eq.shape[0])
         b_eq[-1] = 1.0
         bounds = [(None, None)] * n + [(0.0, 1.0 / g_lower)]

@@ -48,6 +48,8 @@ from ..model.parameter_box import LinkBox
 from ..model.regressor import link_regressor_map
 from ..model.robot import Robot
 from .data import Samples
+from .derivative_error import derivative_torque_error
+from .envelopes import LinkBounds
 from .lp import Polytope
 
 #: Variables of a link with a physical prior, and where each group starts.
@@ -57,80 +59,6 @@ STANDARD, COM, INERTIA_C, W = 0, 10, 13, 19
 _COMPONENTS = ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))
 #: Relative rounding allowance of a regressor row times the parameters.
 ROUNDING = 1e-10
-
-
-# ============================================================================ intervals
-def _mul(a, b):
-    products = [a[0] * b[0], a[0] * b[1], a[1] * b[0], a[1] * b[1]]
-    return min(products), max(products)
-
-
-def _square(a):
-    lo, hi = a
-    top = max(lo * lo, hi * hi)
-    return (0.0 if lo <= 0 <= hi else min(lo * lo, hi * hi)), top
-
-
-def _add(*intervals):
-    return sum(i[0] for i in intervals), sum(i[1] for i in intervals)
-
-
-def _outward(interval):
-    """An interval computed in floating point, widened for its rounding (relative 1e-12); an
-    exact zero (a product with an exactly known zero) stays exact."""
-    lo, hi = interval
-    if lo == hi == 0.0:
-        return 0.0, 0.0
-    slack = 1e-12 * (abs(lo) + abs(hi)) + 1e-300
-    return lo - slack, hi + slack
-
-
-@dataclass
-class LinkBounds:
-    """Current bounds of a physical link's ``m``, ``c``, ``h`` and ``I_C`` (prior, then tightened
-    by identification rounds)."""
-
-    mass: tuple[float, float]
-    com: list[tuple[float, float]]
-    inertia: list[tuple[float, float]]
-    h: list[tuple[float, float]]
-
-    @classmethod
-    def of_prior(cls, box: LinkBox) -> LinkBounds:
-        lo, hi = box.lower, box.upper
-        mass = (float(lo[0]), float(hi[0]))
-        com = [(float(lo[1 + k]), float(hi[1 + k])) for k in range(3)]
-        inertia = [(float(lo[4 + k]), float(hi[4 + k])) for k in range(6)]
-        h = [_outward(_mul(mass, c)) for c in com]
-        return cls(mass, com, inertia, h)
-
-    def w_bounds(self, j: int, k: int) -> tuple[float, float]:
-        """Bounds of ``w_jk = m c_j c_k``: the tighter of ``[h_j] [c_k]`` and ``[m][c_j][c_k]``."""
-        direct = _mul(self.h[j], self.com[k])
-        triple = _mul(self.mass, _square(self.com[j]) if j == k else _mul(self.com[j], self.com[k]))
-        lo, hi = max(direct[0], triple[0]), min(direct[1], triple[1])
-        if j == k:
-            lo = max(lo, 0.0)
-        return _outward((lo, max(lo, hi)))
-
-    def standard(self) -> tuple[np.ndarray, np.ndarray]:
-        """Interval enclosure of the standard parameters ``[m, h, I_O]``."""
-        lo, hi = np.empty(10), np.empty(10)
-        lo[0], hi[0] = self.mass
-        for k in range(3):
-            lo[1 + k], hi[1 + k] = self.h[k]
-        w = {(j, k): self.w_bounds(j, k) for j in range(3) for k in range(3)}
-        extra = {
-            0: _add(w[1, 1], w[2, 2]),
-            1: (-w[0, 1][1], -w[0, 1][0]),
-            2: _add(w[0, 0], w[2, 2]),
-            3: (-w[0, 2][1], -w[0, 2][0]),
-            4: (-w[1, 2][1], -w[1, 2][0]),
-            5: _add(w[0, 0], w[1, 1]),
-        }
-        for n in range(6):
-            lo[4 + n], hi[4 + n] = _outward(_add(self.inertia[n], extra[n]))
-        return lo, hi
 
 
 # ============================================================================ unknowns
@@ -207,7 +135,11 @@ class Problem:
         robot, samples = self.robot, self.samples
         names = [u.box.link for u in self.unknowns]
         B = link_regressor_map(robot, names) if names else np.zeros((10 * robot.dof, 0))
-        phi0 = np.concatenate([u.box.standard_parameters(u.box.nominal) for u in self.unknowns]) if names else np.zeros(0)
+        phi0 = (
+            np.concatenate([u.box.standard_parameters(u.box.nominal) for u in self.unknowns])
+            if names
+            else np.zeros(0)
+        )
         known_body = robot.nominal_parameters - B @ phi0
         model = robot.model
         data = model.createData()
@@ -224,9 +156,16 @@ class Problem:
             magnitude[k] = np.abs(Y) @ np.abs(known_body)
         self.Y_u = Y_u
         self.tau_known = tau_known
-        phi_scale = np.concatenate(
-            [np.maximum(np.abs(lo), np.abs(hi)) for lo, hi in (self._standard_box(u) for u in self.unknowns)]
-        ) if names else np.zeros(0)
+        phi_scale = (
+            np.concatenate(
+                [
+                    np.maximum(np.abs(lo), np.abs(hi))
+                    for lo, hi in (self._standard_box(u) for u in self.unknowns)
+                ]
+            )
+            if names
+            else np.zeros(0)
+        )
         rounding = ROUNDING * (magnitude + np.abs(Y_u) @ phi_scale + np.abs(samples.tau)) + 1e-12
         self.body_center, self.body_radius = self._body_enclosure(B, known_body)
         self.error = rounding + derivative_torque_error(self, samples)
@@ -308,7 +247,9 @@ class Problem:
             for m, (row, column) in enumerate(self.joint_unknowns):
                 index = self.joint_offset + m
                 if row == 0:
-                    high_side[:, column, index] = low_side[:, column, index] = samples.qdd[:, column]
+                    high_side[:, column, index] = low_side[:, column, index] = samples.qdd[
+                        :, column
+                    ]
                 elif row == 1:
                     high_side[:, column, index] = low_side[:, column, index] = samples.qd[:, column]
                 else:
@@ -316,7 +257,10 @@ class Problem:
                     low_side[:, column, index] = self.sign_high[:, column]
         A = np.vstack([high_side.reshape(K * n, -1), -low_side.reshape(K * n, -1)])
         b = np.concatenate(
-            [(residual - known_high + bound).reshape(-1), -(residual - known_low - bound).reshape(-1)]
+            [
+                (residual - known_high + bound).reshape(-1),
+                -(residual - known_low - bound).reshape(-1),
+            ]
         )
         return A, b
 
@@ -411,58 +355,6 @@ def _cut_directions() -> list[np.ndarray]:
             u[i], u[j] = 1.0, sign
             directions.append(u / np.sqrt(2.0))
     return directions
-
-
-# ============================================================================ derivative errors
-def derivative_torque_error(problem: Problem, samples: Samples) -> np.ndarray:
-    """``(K, n)`` bound of the torque change when ``qd``, ``qdd`` move within their error bounds,
-    over the prior box of body parameters (``problem.body_center``, ``body_radius``)::
-
-        |M(q) da| + |2 Gamma(q; qd, dv)| + |Gamma(q; dv, dv)| + Ia da + Dv dv
-
-    with the Christoffel form ``Gamma(q; u, v) = (c(q, u + v) - c(q, u - v)) / 4`` evaluated by
-    the gravity-free regressor, each entry bounded over the box by ``|Y p_c| + |Y| p_r``.
-    """
-    K, n = samples.count, problem.robot.dof
-    error = np.zeros((K, n))
-    if not samples.estimated:
-        return error
-    model = problem.robot.model.copy()
-    model.gravity.linear = np.zeros(3)
-    data = model.createData()
-    pc, pr = problem.body_center, problem.body_radius
-    eye = np.eye(n)
-    zero = np.zeros(n)
-
-    def regressor(config, v, a):
-        return np.asarray(pin.computeJointTorqueRegressor(model, data, config, v, a)).reshape(n, -1)
-
-    def magnitude(Y):
-        return np.abs(Y @ pc) + np.abs(Y) @ pr
-
-    joints = problem.joints
-    for k in range(K):
-        dv, da = samples.velocity_error[k], samples.acceleration_error[k]
-        if not (np.any(dv) or np.any(da)):
-            continue
-        config = problem.robot.configuration(samples.q[k])
-        v = samples.qd[k]
-        total = np.zeros(n)
-        for j in np.flatnonzero(da):
-            total += magnitude(regressor(config, zero, eye[j])) * da[j]
-        for j in np.flatnonzero(dv):
-            gamma = (regressor(config, v + eye[j], zero) - regressor(config, v - eye[j], zero)) / 4
-            total += 2 * magnitude(gamma) * dv[j]
-        active = np.flatnonzero(dv)
-        for a, b in itertools.combinations_with_replacement(active, 2):
-            gamma = (
-                regressor(config, eye[a] + eye[b], zero) - regressor(config, eye[a] - eye[b], zero)
-            ) / 4
-            total += magnitude(gamma) * dv[a] * dv[b] * (1 if a == b else 2)
-        if joints is not None:
-            total += joints.upper[0] * da + joints.upper[1] * dv
-        error[k] = total * (1 + 1e-9)
-    return error
 
 
 __all__ = ["JOINT_FIELDS", "Problem", "Unknown", "derivative_torque_error"]

@@ -39,7 +39,9 @@ def record(
 ) -> Samples:
     """Samples of ``plant`` along ``trajectory`` at ``times`` with bounded torque noise."""
     if kind not in NOISE_KINDS:
-        raise InputError(f"unknown noise kind '{kind}'; valid: {', '.join(NOISE_KINDS)}", field="kind")
+        raise InputError(
+            f"unknown noise kind '{kind}'; valid: {', '.join(NOISE_KINDS)}", field="kind"
+        )
     times = np.asarray(times, dtype=float)
     q, qd, qdd = trajectory.evaluate(times)
     tau = plant_torques(plant, q, qd, qdd)

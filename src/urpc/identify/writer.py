@@ -37,9 +37,20 @@ def _text(value: Decimal) -> str:
     return "0" if text in ("-0", "0E+1") else text
 
 
-def _interval(lo: float, hi: float) -> str:
+def _interval(lo: float, hi: float, prior: tuple[float, float] | None = None) -> str:
+    """``[lo, hi]`` rounded outward; an end at the prior's end is written as the prior's exact
+    value (the prior contains every consistent value, so no rounding slack is needed there)."""
     a, b = outward(lo, hi)
+    if prior is not None:
+        if lo <= prior[0]:
+            a = repr(float(prior[0]))
+        if hi >= prior[1]:
+            b = repr(float(prior[1]))
     return f"[{a}, {b}]"
+
+
+def _ends(box, k: int) -> tuple[float, float]:
+    return float(box.lower[k]), float(box.upper[k])
 
 
 def _g(value: float) -> str:
@@ -113,7 +124,9 @@ def _body_entries(box, identified, widen_to_nominal: bool) -> list[str]:
         field = identified.get((box.link, name))
         if field is None:  # not identified (payload mode): the prior interval as it was
             entries.append(
-                _commented(f"{name}: {_interval(box.lower[k], box.upper[k])}", "prior, unchanged")
+                _commented(
+                    f"{name}: {_interval(*_ends(box, k), _ends(box, k))}", "prior, unchanged"
+                )
             )
             continue
         lo, hi = field.identified
@@ -122,7 +135,7 @@ def _body_entries(box, identified, widen_to_nominal: bool) -> list[str]:
         if widen_to_nominal and not lo <= nominal <= hi:
             comment += f"; widened to the URDF value {_g(nominal)} (the format's nominal)"
             lo, hi = min(lo, nominal), max(hi, nominal)
-        entries.append(_commented(f"{name}: {_interval(lo, hi)}", comment))
+        entries.append(_commented(f"{name}: {_interval(lo, hi, field.prior)}", comment))
     return entries
 
 
@@ -138,11 +151,13 @@ def _payload_lines(result, box, payload, identified) -> list[str]:
         field = identified.get((box.link, name))
         if field is not None:
             lo, hi = field.identified
-            lines.append(_commented(f"  {name}: {_interval(lo, hi)}", _comment(field)))
+            lines.append(_commented(f"  {name}: {_interval(lo, hi, field.prior)}", _comment(field)))
             center[k] = 0.5 * (lo + hi)
         elif box.uncertain[k]:
             lines.append(
-                _commented(f"  {name}: {_interval(box.lower[k], box.upper[k])}", "prior, unchanged")
+                _commented(
+                    f"  {name}: {_interval(*_ends(box, k), _ends(box, k))}", "prior, unchanged"
+                )
             )
         elif box.nominal[k] != 0.0 or name == "mass":
             lines.append(f"  {name}: {box.nominal[k]!r}")
@@ -156,7 +171,9 @@ def _payload_lines(result, box, payload, identified) -> list[str]:
             clipped[k] = min(max(clipped[k], field.identified[0]), field.identified[1])
     candidates.append(clipped)
     for candidate in candidates:
-        if candidate[0] >= 0 and not inertia_problem(np.asarray(inertia_from_physical(candidate).inertia)):
+        if candidate[0] >= 0 and not inertia_problem(
+            np.asarray(inertia_from_physical(candidate).inertia)
+        ):
             nominal = {
                 name: float(candidate[k])
                 for k, name in enumerate(PHYSICAL_FIELDS)
@@ -181,11 +198,15 @@ def _joint_lines(result, identified) -> list[str]:
             field = identified.get((joint, key))
             if field is not None:
                 lo, hi = field.identified
-                entries.append(_commented(f"    {key}: {_interval(lo, hi)}", _comment(field)))
+                entries.append(
+                    _commented(f"    {key}: {_interval(lo, hi, field.prior)}", _comment(field))
+                )
                 nominal[key] = 0.5 * (lo + hi)
             elif joints.uncertain[row, column]:
                 lo, hi = joints.lower[row, column], joints.upper[row, column]
-                entries.append(_commented(f"    {key}: {_interval(lo, hi)}", "prior, unchanged"))
+                entries.append(
+                    _commented(f"    {key}: {_interval(lo, hi, (lo, hi))}", "prior, unchanged")
+                )
                 nominal[key] = float(joints.nominal[row, column])
             elif joints.nominal[row, column] != urdf[row, column]:
                 entries.append(f"    {key}: {float(joints.nominal[row, column])!r}")
