@@ -31,6 +31,7 @@ _LAZY = {
     "certify": (".control.certificate", "certify"),
     "IntervalPassivityController": (".control.interval", "IntervalPassivityController"),
     "synthesize": (".control.synthesis", "synthesize"),
+<<<<<<< HEAD
     "load_controller": (".control.controller_file", "load_controller"),
     "ControlLoop": (".robot.loop", "ControlLoop"),
     "SafetyLayer": (".robot.safety", "SafetyLayer"),
@@ -43,6 +44,9 @@ _LAZY = {
     "StreamedReference": (".trajectory_sources", "StreamedReference"),
     "from_samples": (".trajectory_sources", "from_samples"),
     "load_samples": (".trajectory_sources", "load_samples"),
+=======
+    "identify": (".identify", "identify"),
+>>>>>>> issue22
     "Assembly": (".model.modular", "Assembly"),
     "assemble": (".model.modular", "assemble"),
     "load_assembly": (".model.modular", "load_assembly"),
@@ -96,6 +100,7 @@ __all__ = [
     "SimulationResult",
     "simulate",
     "synthesize",
+<<<<<<< HEAD
     "load_controller",
     "ControlLoop",
     "SafetyLayer",
@@ -108,6 +113,9 @@ __all__ = [
     "StreamedReference",
     "from_samples",
     "load_samples",
+=======
+    "identify",
+>>>>>>> issue22
     "assemble",
     "load_assembly",
     "load_module_library",
@@ -137,6 +145,7 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
     from .control.controller_file import load_controller
     from .control.interval import IntervalPassivityController
     from .control.synthesis import synthesize
+    from .identify import identify
     from .model.modular import Assembly, assemble, load_assembly, load_module_library
     from .model.robot import Robot, load_robot
     from .model.uncertainty import (

@@ -14,10 +14,23 @@ import warnings
 from collections.abc import Sequence
 
 from ..errors import UrpcError
-from . import bench, campaign, certify, demo, init, inspect, run, simulate, virtual_robot
+from . import (
+    bench,
+    campaign,
+    certify,
+    demo,
+    identify,
+    init,
+    inspect,
+    run,
+    simulate,
+    virtual_robot,
+)
 from .common import EXIT_INPUT, EXIT_OK, Parser, one_line
 
-COMMAND_MODULES = [inspect, init, simulate, certify, demo, campaign, bench, run, virtual_robot]
+COMMAND_MODULES = [
+    inspect, init, identify, simulate, certify, demo, campaign, bench, run, virtual_robot,
+]  # fmt: skip
 
 
 def build_parser() -> argparse.ArgumentParser:
