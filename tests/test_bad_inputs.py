@@ -167,6 +167,8 @@ CASES: dict[str, Case] = {
     "box_joint_nominal_outside": _box_case("joints: {joint1: {damping: [1, 2], nominal: {damping: 3}}}", "joints.joint1.damping", "outside the box", "nominal"),
     "box_joint_negative_nominal": _box_case("joints: {joint1: {nominal: {friction: -1}}}", "joints.joint1.nominal.friction", ">= 0"),
     "box_joint_relative_lo_gt_hi": _box_case("joints: {joint1: {friction: [2, 1]}}", "joints.joint1.friction", "greater than"),
+    # ------------------------------------------------- issue 21: hostile and unchecked inputs
+    "point_joints_without_box_section": Case({"point.yaml": "joints: {joint1: {friction: 0.5}}"}, ["simulate", "--robot", "rr_planar", "--true-params", "{tmp}/point.yaml", "--duration", "0.01"], lambda tmp: urpc.load_parameter_point(tmp / "point.yaml", urpc.load_robot("rr_planar"), urpc.load_uncertainty("rr_planar", urpc.load_robot("rr_planar"))), ("joints.joint1.friction", "no 'joints:' section")),
     # ------------------------------------------------------------ API mistakes (issue 10.6)
     "box_for_another_robot": Case({}, _check("ur5", str(RR_DIR / "uncertainty.yaml")), lambda tmp: urpc.load_uncertainty("rr_planar", urpc.load_robot("ur5")), ("this box is for robot 'rr_planar'", "not for 'ur5'", "field 'robot'"), names_file="uncertainty.yaml"),
     # ---------------------------------------------------------------- states and methods

@@ -18,6 +18,7 @@ import numpy as np
 from ...errors import InputError
 from ...model.inertia import inertia_problem
 from ...model.parameter_box import joint_values, link_points
+from ...model.parameter_point import box_excursions as parameter_excursions
 from ...model.robot import Robot, load_robot
 from ...model.uncertainty import UNITS, ParameterBox, load_parameter_point, load_uncertainty
 from ...sim.trajectories import (
@@ -65,7 +66,7 @@ class ScenarioSetup:
     def outside_box(self) -> dict[str, float]:
         """``link.field`` -> distance [SI] outside the box of each true parameter that is not in
         it (empty: the true plant is one of the plants the guarantee covers)."""
-        return box_excursions(self.box, self.true_point)
+        return parameter_excursions(self.box, self.true_point, self.robot)
 
     @property
     def inside_box(self) -> bool:
@@ -73,18 +74,10 @@ class ScenarioSetup:
 
 
 def box_excursions(box: ParameterBox, point: dict[str, np.ndarray]) -> dict[str, float]:
-    """``link.field`` -> distance [SI] outside ``box`` of the coordinates of ``point`` that are
-    not in it (rounding of 1e-12 relative tolerated)."""
-    excursions = {}
-    for box_link in box.links:
-        if box_link.link not in point:
-            continue
-        values = np.asarray(point[box_link.link], dtype=float)
-        tolerance = 1e-12 * np.maximum(1.0, np.abs(values))
-        distance = np.maximum(box_link.lower - values, values - box_link.upper)
-        for k in np.flatnonzero(distance > tolerance):
-            excursions[f"{box_link.link}.{box_link.fields[k]}"] = float(distance[k])
-    return excursions
+    """``link.field`` or ``joint.field`` -> distance [SI] outside ``box`` of the coordinates of
+    ``point`` that are not in it, links, payloads and joint drives alike
+    (:func:`urpc.model.parameter_point.box_excursions`)."""
+    return parameter_excursions(box, point)
 
 
 def build(scenario: Scenario) -> ScenarioSetup:
