@@ -11,8 +11,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import shutil
-import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
 from functools import cached_property
@@ -315,14 +313,20 @@ def check_writable(directory: str | Path) -> Path:
     return directory
 
 
+#: Suffix of a file being written by :func:`write_files` (it replaces the final name when complete).
+PARTIAL_SUFFIX = ".partial"
+
+
 def write_files(directory: str | Path, writers: Mapping[str, Callable[[Path], None]]) -> Path:
     """Write a set of files into ``directory`` so that a failure leaves no partial file behind.
 
     ``writers`` maps a relative file name (``"summary.json"``, ``"runs/s1/result.npz"``) to a
-    function that writes that file at the path it is given. Every file is first written into a
-    staging directory; only when all are written do they move into place: a new ``directory``
-    (its parents are created) is the staging directory renamed, an existing one receives each file
-    by ``os.replace`` (other files in it are kept).
+    function that writes that file at the path it is given. Every file is first written under its
+    final name plus :data:`PARTIAL_SUFFIX`, in its final folder; only when all are written do they
+    take their final names (``os.replace``; other files in ``directory`` are kept). An exception
+    removes the partial files and the folders this call created; a process killed while writing
+    leaves visible ``*.partial`` files inside ``directory`` (replaced by the next write), never a
+    hidden scratch folder beside it. Folders and files follow the umask.
 
     Returns:
         The directory.
@@ -338,30 +342,40 @@ def write_files(directory: str | Path, writers: Mapping[str, Callable[[Path], No
         )
     check_writable(directory)  # a file in the way is an InputError, not NotADirectoryError
     directory = Path(directory)
-    existing = directory.is_dir()
-    if existing:
-        parent = directory
-    else:
-        parent = directory.parent
-        parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", suffix=".tmp", dir=parent))
+    created: list[Path] = []
+    staged: list[tuple[Path, Path]] = []
     try:
+        _make_folders(directory, created)
         for name, write in writers.items():
-            path = staging / name
-            path.parent.mkdir(parents=True, exist_ok=True)
-            write(path)
-        if not existing:
-            os.rename(staging, directory)
-            return directory
-        for name in writers:
             final = directory / name
-            final.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(staging / name, final)
+            _make_folders(final.parent, created)
+            partial = final.with_name(final.name + PARTIAL_SUFFIX)
+            staged.append((partial, final))
+            write(partial)
+        for partial, final in staged:
+            os.replace(partial, final)
     except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
+        for partial, _ in staged:
+            partial.unlink(missing_ok=True)
+        for folder in reversed(created):
+            try:
+                folder.rmdir()
+            except OSError:
+                pass
         raise
-    shutil.rmtree(staging, ignore_errors=True)
     return directory
+
+
+def _make_folders(folder: Path, created: list[Path]) -> None:
+    """Create ``folder`` and its missing parents (mode 0o777 less the umask), appending each
+    folder created to ``created``, parents first."""
+    missing = []
+    while not folder.exists():
+        missing.append(folder)
+        folder = folder.parent
+    for path in reversed(missing):
+        path.mkdir(exist_ok=True)
+        created.append(path)
 
 
 def _json_float(value: float) -> float | None:

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict
-from pathlib import Path
 from typing import Any
 
 from ...sim.progress import Progress, report_labelled
@@ -23,8 +22,9 @@ def scenario_name(number: int, ic: int) -> str:
     return f"{_ROBOT}/s{number}_ic{ic}"
 
 
-def run_one(number: int, ic: int, controller: str, duration: float | None, scratch: str) -> dict:
-    """One run (in a worker process): simulate, save npz + summary, return what the report needs."""
+def run_one(number: int, ic: int, controller: str, duration: float | None) -> dict:
+    """One run (in a worker process): simulate, return the result and what the report needs (the
+    parent writes every file at once: a killed reproduction leaves no scratch folder)."""
     from ..scenario import build, build_controller, load_scenario, simulate_setup
 
     scenario = load_scenario(scenario_name(number, ic))
@@ -34,7 +34,6 @@ def run_one(number: int, ic: int, controller: str, duration: float | None, scrat
     law = build_controller(setup, controller)
     result = simulate_setup(setup, law)
     folder = f"s{number}_ic{ic}-{controller}"
-    result.save(Path(scratch) / folder, csv=False)
     run = {"result": result, "folder": folder}
     if controller == "r-alpha":
         betas = law.betas
@@ -50,16 +49,16 @@ def run_one(number: int, ic: int, controller: str, duration: float | None, scrat
     return run
 
 
-def run_all(jobs, duration, scratch: Path, workers: int, reporter) -> dict:
+def run_all(jobs, duration, workers: int, reporter) -> dict:
     runs = {}
     if workers == 1:
         with reporter:
             for job in jobs:
-                runs[job] = run_one(*job, duration, str(scratch))
+                runs[job] = run_one(*job, duration)
                 reporter.done(_label(job))
         return runs
     with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(run_one, *job, duration, str(scratch)): job for job in jobs}
+        futures = {pool.submit(run_one, *job, duration): job for job in jobs}
         reporter.open()
         try:
             for future in as_completed(futures):
