@@ -129,7 +129,9 @@ def _refuse_what_the_box_lacks(
     """
     if spec.joints and box.joints is None:
         fields = ", ".join(
-            f"joints.{joint}.{key}" for joint, entry in spec.joints.items() for key in entry.values()
+            f"joints.{joint}.{key}"
+            for joint, entry in spec.joints.items()
+            for key in entry.values()
         )
         raise InputError(
             f"the box ({box.source or 'given'}) has no 'joints:' section, so the joint drives "

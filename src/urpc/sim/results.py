@@ -313,8 +313,14 @@ def check_writable(directory: str | Path) -> Path:
     return directory
 
 
-#: Suffix of a file being written by :func:`write_files` (it replaces the final name when complete).
+#: Marker of a file being written by :func:`write_files`: ``NAME.partial.EXT`` (the extension
+#: kept for writers that infer the format from it) takes the name ``NAME.EXT`` when complete.
 PARTIAL_SUFFIX = ".partial"
+
+
+def partial_path(final: Path) -> Path:
+    """Where :func:`write_files` writes ``final`` until it is complete."""
+    return final.with_name(f"{final.stem}{PARTIAL_SUFFIX}{final.suffix}")
 
 
 def write_files(directory: str | Path, writers: Mapping[str, Callable[[Path], None]]) -> Path:
@@ -322,10 +328,10 @@ def write_files(directory: str | Path, writers: Mapping[str, Callable[[Path], No
 
     ``writers`` maps a relative file name (``"summary.json"``, ``"runs/s1/result.npz"``) to a
     function that writes that file at the path it is given. Every file is first written under its
-    final name plus :data:`PARTIAL_SUFFIX`, in its final folder; only when all are written do they
+    partial name (:func:`partial_path`, ``summary.partial.json``) in its final folder; only when all are written do they
     take their final names (``os.replace``; other files in ``directory`` are kept). An exception
     removes the partial files and the folders this call created; a process killed while writing
-    leaves visible ``*.partial`` files inside ``directory`` (replaced by the next write), never a
+    leaves visible ``*.partial.*`` files inside ``directory`` (replaced by the next write), never a
     hidden scratch folder beside it. Folders and files follow the umask.
 
     Returns:
@@ -349,7 +355,7 @@ def write_files(directory: str | Path, writers: Mapping[str, Callable[[Path], No
         for name, write in writers.items():
             final = directory / name
             _make_folders(final.parent, created)
-            partial = final.with_name(final.name + PARTIAL_SUFFIX)
+            partial = partial_path(final)
             staged.append((partial, final))
             write(partial)
         for partial, final in staged:

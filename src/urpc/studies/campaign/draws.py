@@ -5,6 +5,7 @@ alone (rules in :mod:`urpc.studies.campaign`)."""
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -15,12 +16,17 @@ import pinocchio as pin
 from ...errors import InputError
 from ...model.parameter_box import link_points
 from ...model.uncertainty import ParameterBox
+from ...wording import count
 from ..scenario import ScenarioSetup
 
 #: Uniform draws tried per run before the box is declared (almost) nowhere physical.
 MAX_DRAWS = 1000
 #: Relative tolerance on the smallest pseudo-inertia eigenvalue (vertices sit on the boundary).
 PSEUDO_INERTIA_TOLERANCE = 1e-12
+
+
+class VertexRunsWarning(UserWarning):
+    """More vertex runs were asked for than the campaign has runs, or the box vertices."""
 
 
 @dataclass(frozen=True)
@@ -100,7 +106,16 @@ def draw_runs(
     run_sequence, selection_sequence = np.random.SeedSequence(seed).spawn(2)
     if vertex_runs is None:
         vertex_runs = total if total <= runs else runs // 2
-    vertex_runs = min(checked_count("vertex_runs", vertex_runs, 0), runs, total)
+    requested = checked_count("vertex_runs", vertex_runs, 0)
+    vertex_runs = min(requested, runs, total)
+    if requested > vertex_runs:
+        limit = f"the {count(runs, 'run')}" if requested > runs else f"the box's {total} vertices"
+        warnings.warn(
+            f"vertex_runs {requested} exceeds {limit}: runs only {vertex_runs} vertex "
+            f"{'run' if vertex_runs == 1 else 'runs'}",
+            VertexRunsWarning,
+            stacklevel=2,
+        )
     if vertex_runs == total:
         candidates = iter(range(total))
     else:

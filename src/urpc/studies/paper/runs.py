@@ -3,11 +3,12 @@ process, and their progress."""
 
 from __future__ import annotations
 
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import asdict
 from typing import Any
 
 from ...sim.progress import Progress, report_labelled
+from ..pool import submit_all, worker_pool
 
 #: The paper's scenarios (Table II number, initial condition) in report order.
 PAPER_RUNS = tuple((number, ic) for number in (1, 2, 3) for ic in (1, 2))
@@ -49,6 +50,10 @@ def run_one(number: int, ic: int, controller: str, duration: float | None) -> di
     return run
 
 
+def _run_job(arguments: tuple) -> dict:
+    return run_one(*arguments)
+
+
 def run_all(jobs, duration, workers: int, reporter) -> dict:
     runs = {}
     if workers == 1:
@@ -57,8 +62,11 @@ def run_all(jobs, duration, workers: int, reporter) -> dict:
                 runs[job] = run_one(*job, duration)
                 reporter.done(_label(job))
         return runs
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(run_one, *job, duration): job for job in jobs}
+    # Workers ignore Ctrl-C and are terminated at once when this parent is interrupted.
+    with worker_pool(workers) as pool:
+        jobs = list(jobs)
+        submitted = submit_all(pool, _run_job, [(*job, duration) for job in jobs])
+        futures = dict(zip(submitted, jobs, strict=True))
         reporter.open()
         try:
             for future in as_completed(futures):
@@ -67,8 +75,6 @@ def run_all(jobs, duration, workers: int, reporter) -> dict:
                 reporter.done(_label(job))
         except BaseException:
             reporter.close(failed=True)  # no bar left above the error line
-            for future in futures:
-                future.cancel()
             raise
         finally:
             reporter.close()
