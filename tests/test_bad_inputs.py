@@ -169,6 +169,9 @@ CASES: dict[str, Case] = {
     "box_joint_relative_lo_gt_hi": _box_case("joints: {joint1: {friction: [2, 1]}}", "joints.joint1.friction", "greater than"),
     # ------------------------------------------------- issue 21: hostile and unchecked inputs
     "point_joints_without_box_section": Case({"point.yaml": "joints: {joint1: {friction: 0.5}}"}, ["simulate", "--robot", "rr_planar", "--true-params", "{tmp}/point.yaml", "--duration", "0.01"], lambda tmp: urpc.load_parameter_point(tmp / "point.yaml", urpc.load_robot("rr_planar"), urpc.load_uncertainty("rr_planar", urpc.load_robot("rr_planar"))), ("joints.joint1.friction", "no 'joints:' section")),
+    "simulate_out_unwritable_for_root_too": Case({}, ["simulate", "rr_planar/s3_ic1", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
+    "campaign_out_unwritable_for_root_too": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "2", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
+    "campaign_neither_scenario_nor_robot": Case({}, ["campaign", "--runs", "2"], None, ("give a scenario file", "--robot"), names_file=""),
     # ------------------------------------------------------------ API mistakes (issue 10.6)
     "box_for_another_robot": Case({}, _check("ur5", str(RR_DIR / "uncertainty.yaml")), lambda tmp: urpc.load_uncertainty("rr_planar", urpc.load_robot("ur5")), ("this box is for robot 'rr_planar'", "not for 'ur5'", "field 'robot'"), names_file="uncertainty.yaml"),
     # ---------------------------------------------------------------- states and methods

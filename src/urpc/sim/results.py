@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
 from functools import cached_property
@@ -289,27 +290,45 @@ class SimulationResult:
 
 
 def check_writable(directory: str | Path) -> Path:
-    """Check, without creating anything, that ``directory`` can be written (it exists as a
-    writable folder, or its nearest existing ancestor is one); returns it as an absolute path.
-    Every command that writes files calls it before any work starts.
+    """Check that ``directory`` can be written, leaving nothing behind: an existing folder
+    receives (and loses at once) a probe file, a missing one is created with its missing parents
+    and removed again. Trying is the only test that holds everywhere (``os.access`` says yes to
+    root in ``/proc`` or on a read-only mount). Returns the folder as an absolute path. Every
+    command that writes files calls it before any work starts.
 
     Raises:
-        InputError: naming the folder that is in the way.
+        InputError: naming the folder that is in the way and why.
     """
     directory = Path(directory).expanduser().absolute()
     if directory.exists() and not directory.is_dir():
         raise InputError(
             "exists and is not a folder; give a folder for the outputs", source=directory
         )
-    target = directory if directory.exists() else directory.parent
+    target = directory
     while not target.exists():
         target = target.parent
-    if not target.is_dir() or not os.access(target, os.W_OK | os.X_OK):
+    if not target.is_dir():
         raise InputError(
-            f"cannot create the output folder: '{target}' is not a writable folder; choose "
-            "another --out",
+            f"cannot create the output folder: '{target}' is not a folder; choose another --out",
             source=directory,
         )
+    try:
+        if directory.exists():
+            handle, probe = tempfile.mkstemp(prefix=".urpc-probe-", dir=directory)
+            os.close(handle)
+            os.unlink(probe)
+        else:
+            created: list[Path] = []
+            try:
+                _make_folders(directory, created)
+            finally:
+                for folder in reversed(created):
+                    folder.rmdir()
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise InputError(
+            f"cannot write the output folder ({reason}); choose another --out", source=directory
+        ) from None
     return directory
 
 
