@@ -172,6 +172,10 @@ CASES: dict[str, Case] = {
     "simulate_out_unwritable_for_root_too": Case({}, ["simulate", "rr_planar/s3_ic1", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
     "campaign_out_unwritable_for_root_too": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "2", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
     "campaign_neither_scenario_nor_robot": Case({}, ["campaign", "--runs", "2"], None, ("give a scenario file", "--robot"), names_file=""),
+    "urdf_revolute_without_limit": _urdf_case(_rr_with('<limit lower="-6.283185307179586" upper="6.283185307179586" effort="1000" velocity="20"/>', ""), "joint.joint1.limit", "no <limit>", "continuous"),
+    "urdf_limit_without_effort": _urdf_case(_rr_with('effort="1000" velocity="20"', 'velocity="20"'), "Pinocchio cannot parse", "limit has no effort"),
+    "box_yaml_alias_bomb": _box_case("links:\n  link2:\n    com_x: [&a [x, x, x, x, x, x, x, x, x, x], &b [*a, *a, *a, *a, *a, *a, *a, *a, *a, *a], &c [*b, *b, *b, *b, *b, *b, *b, *b, *b, *b], &d [*c, *c, *c, *c, *c, *c, *c, *c, *c, *c], &e [*d, *d, *d, *d, *d, *d, *d, *d, *d, *d], &f [*e, *e, *e, *e, *e, *e, *e, *e, *e, *e]]\n", "aliases", "more than"),
+    "box_yaml_too_deep": _box_case("links: " + "[" * 40 + "]" * 40, "nested deeper than"),
     # ------------------------------------------------------------ API mistakes (issue 10.6)
     "box_for_another_robot": Case({}, _check("ur5", str(RR_DIR / "uncertainty.yaml")), lambda tmp: urpc.load_uncertainty("rr_planar", urpc.load_robot("ur5")), ("this box is for robot 'rr_planar'", "not for 'ur5'", "field 'robot'"), names_file="uncertainty.yaml"),
     # ---------------------------------------------------------------- states and methods

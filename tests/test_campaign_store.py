@@ -212,11 +212,28 @@ def test_a_damaged_record_file_is_one_error_line(scenario_file, tmp_path, capsys
     assert err.startswith("error: ") and err.count("\n") == 1 and STORE_NAME in err
 
 
-def test_api_resume_of_a_complete_campaign_reads_the_records(reference, scenario_file):
+def test_resume_of_a_complete_campaign_reads_the_records_and_a_new_one_replaces_it(
+    reference, scenario_file, tmp_path
+):
     result = run_campaign(str(scenario_file), RUNS, workers=1, seed=3, out=reference, resume=True)
     assert result.runs == RUNS
-    with pytest.raises(InputError, match="--resume"):
-        run_campaign(str(scenario_file), RUNS, workers=1, seed=3, out=reference)
+    out = tmp_path / "campaign"
+    run_campaign(str(scenario_file), 2, workers=1, seed=3, out=out)
+    run_campaign(str(scenario_file), 3, workers=1, seed=4, out=out)  # finished: replaced
+    assert json.loads((out / SUMMARY_NAME).read_text())["runs"] == 3
+
+
+def test_an_interrupted_campaign_is_not_replaced_without_resume(scenario_file, tmp_path):
+    out = tmp_path / "campaign"
+    scenario = load_scenario(str(scenario_file))
+    settings = campaign_settings(scenario, RUNS, 3, 2.0, None)
+    done = run_campaign(str(scenario_file), RUNS, workers=1, seed=3)
+    with CampaignStore.open(out, settings, resume=False) as store:
+        store.add(done.outcomes[0])  # what a campaign killed after its first run leaves
+    with pytest.raises(InputError, match="interrupted campaign .1 of 6 runs"):
+        run_campaign(str(scenario_file), 2, workers=1, seed=3, out=out)
+    result = run_campaign(str(scenario_file), RUNS, workers=1, seed=3, out=out, resume=True)
+    assert result.rows() == done.rows()
 
 
 def test_vertex_runs_beyond_the_runs_say_so(scenario_file, tmp_path, capsys):

@@ -309,7 +309,8 @@ def check_writable(directory: str | Path) -> Path:
         target = target.parent
     if not target.is_dir():
         raise InputError(
-            f"cannot create the output folder: '{target}' is not a folder; choose another --out",
+            f"cannot create the output folder: '{target}' is not a writable folder; choose "
+            "another --out",
             source=directory,
         )
     try:

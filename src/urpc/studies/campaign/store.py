@@ -12,6 +12,8 @@ finished run and can resume.
 * **Settings.** The first row of ``settings`` holds what determines the runs (the scenario's
   document, seed, run count, initial spread, vertex runs, urpc's version); ``--resume`` continues
   only a campaign with the same settings and names what differs otherwise.
+* **Replacing.** A new campaign on a folder whose campaign finished replaces it (as any new run
+  replaces earlier outputs); an interrupted one is kept until it is resumed or deleted.
 * **One campaign per folder.** ``DIR/campaign.lock`` is held with ``fcntl.flock`` while the
   campaign runs (the kernel releases it when the process dies, even by SIGKILL); a second
   campaign on the same folder is refused at start, naming the folder.
@@ -95,7 +97,11 @@ class CampaignStore:
         text = json.dumps(settings, sort_keys=True)
         row = self._query("SELECT value FROM settings WHERE key = 'campaign'").fetchone()
         done = self.count()
-        if row is None or done == 0:  # nothing recorded yet: (re)start with these settings
+        recorded = _runs(row[0]) if row is not None else 0
+        complete = isinstance(recorded, int) and done >= recorded
+        # Nothing recorded yet, or a finished campaign (its outputs written) that a new one
+        # replaces, as a new run replaces any output: (re)start with these settings.
+        if row is None or done == 0 or (complete and not resume):
             with self._connection:
                 self._connection.execute("DELETE FROM runs")
                 self._connection.execute(
@@ -104,9 +110,9 @@ class CampaignStore:
             return
         if not resume:
             raise InputError(
-                f"holds the records of a campaign ({done} of {_runs(row[0])} runs in "
-                f"{STORE_NAME}); add --resume to continue it (or to rebuild the outputs of a "
-                f"finished one), give another --out, or delete {STORE_NAME} to start over",
+                f"holds an interrupted campaign ({done} of {recorded} runs recorded in "
+                f"{STORE_NAME}); add --resume to continue it, give another --out, or delete "
+                f"{STORE_NAME} to start over",
                 source=self.directory,
             )
         stored = json.loads(row[0])
