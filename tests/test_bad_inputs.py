@@ -176,6 +176,9 @@ CASES: dict[str, Case] = {
     "urdf_limit_without_effort": _urdf_case(_rr_with('effort="1000" velocity="20"', 'velocity="20"'), "Pinocchio cannot parse", "limit has no effort"),
     "box_yaml_alias_bomb": _box_case("links:\n  link2:\n    com_x: [&a [x, x, x, x, x, x, x, x, x, x], &b [*a, *a, *a, *a, *a, *a, *a, *a, *a, *a], &c [*b, *b, *b, *b, *b, *b, *b, *b, *b, *b], &d [*c, *c, *c, *c, *c, *c, *c, *c, *c, *c], &e [*d, *d, *d, *d, *d, *d, *d, *d, *d, *d], &f [*e, *e, *e, *e, *e, *e, *e, *e, *e, *e]]\n", "aliases", "more than"),
     "box_yaml_too_deep": _box_case("links: " + "[" * 40 + "]" * 40, "nested deeper than"),
+    "negative_epsilon_reaches_urpc": Case({}, ["simulate", "rr_planar/s3_ic1", "--epsilon", "-1e-2"], None, ("epsilon must be > 0", "-1e-2"), names_file=""),
+    "negative_percentage_reaches_urpc": Case({}, ["init", "rr_planar", "--out", "{tmp}/box.yaml", "--mass", "-5%"], None, ("--mass", "'-5%' must lie in [0%, 100%)"), names_file=""),
+    "negative_runs_reaches_urpc": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "-2"], None, ("--runs", "'-2' must be an integer >= 1"), names_file=""),
     # ------------------------------------------------------------ API mistakes (issue 10.6)
     "box_for_another_robot": Case({}, _check("ur5", str(RR_DIR / "uncertainty.yaml")), lambda tmp: urpc.load_uncertainty("rr_planar", urpc.load_robot("ur5")), ("this box is for robot 'rr_planar'", "not for 'ur5'", "field 'robot'"), names_file="uncertainty.yaml"),
     # ---------------------------------------------------------------- states and methods

@@ -47,3 +47,9 @@ def test_bare_urpc_lists_the_commands(capsys):
     assert main([]) == 0
     out, err = capsys.readouterr()
     assert err == "" and "simulate" in out and "campaign" in out and "init" in out
+
+
+def test_negative_values_are_values(capsys):
+    argv = ["bound", "rr_planar", "--q", "-0.1,0.2", "--qd", "-1,1", "--qd-a", "1,-1e-1"]
+    assert main([*argv, "--qdd-a", "2,2", "--json"]) == 0
+    assert capsys.readouterr().err == ""
