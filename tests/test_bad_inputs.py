@@ -179,6 +179,8 @@ CASES: dict[str, Case] = {
     "negative_epsilon_reaches_urpc": Case({}, ["simulate", "rr_planar/s3_ic1", "--epsilon", "-1e-2"], None, ("epsilon must be > 0", "-1e-2"), names_file=""),
     "negative_percentage_reaches_urpc": Case({}, ["init", "rr_planar", "--out", "{tmp}/box.yaml", "--mass", "-5%"], None, ("--mass", "'-5%' must lie in [0%, 100%)"), names_file=""),
     "negative_runs_reaches_urpc": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "-2"], None, ("--runs", "'-2' must be an integer >= 1"), names_file=""),
+    "box_joint_relative_width_of_zero": _box_case("joints: {joint1: {friction: 50%}}", "joints.joint1.friction", "nominal friction of 0", "no width at all", "[0, 1]"),
+    "box_joint_relative_armature_of_zero": _box_case("joints: {joint2: {armature: 10%}}", "joints.joint2.armature", "URDFs carry no armature"),
     # ------------------------------------------------------------ API mistakes (issue 10.6)
     "box_for_another_robot": Case({}, _check("ur5", str(RR_DIR / "uncertainty.yaml")), lambda tmp: urpc.load_uncertainty("rr_planar", urpc.load_robot("ur5")), ("this box is for robot 'rr_planar'", "not for 'ur5'", "field 'robot'"), names_file="uncertainty.yaml"),
     # ---------------------------------------------------------------- states and methods
