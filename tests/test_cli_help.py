@@ -5,6 +5,7 @@ commands (issue 21.7)."""
 from __future__ import annotations
 
 import argparse
+import json
 
 import pytest
 
@@ -53,3 +54,15 @@ def test_negative_values_are_values(capsys):
     argv = ["bound", "rr_planar", "--q", "-0.1,0.2", "--qd", "-1,1", "--qd-a", "1,-1e-1"]
     assert main([*argv, "--qdd-a", "2,2", "--json"]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_a_urdf_file_is_named_by_its_robot_name(tmp_path, capsys):
+    from conftest import RR_DIR
+
+    (tmp_path / "model.urdf").write_text((RR_DIR / "rr_planar.urdf").read_text())
+    box = tmp_path / "box.yaml"
+    box.write_text("links: {link2: {mass: [5, 10]}}\n")
+    argv = ["simulate", "--robot", str(tmp_path / "model.urdf"), "-u", str(box)]
+    assert main([*argv, "--duration", "0.02", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["scenario"] == "rr_planar"  # <robot name="rr_planar">, not the stem "model"

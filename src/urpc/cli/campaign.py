@@ -150,6 +150,7 @@ def campaign_scenario(args):
     robot's shipped box), as in ``simulate``; with SCENARIO, ``--robot``/``--uncertainty``
     override its own."""
     from ..model.catalog import default_uncertainty, resolve_robot
+    from ..model.urdf import robot_display_name
     from ..studies.scenario import load_scenario, parse_scenario
 
     uncertainty = args.uncertainty
@@ -174,7 +175,7 @@ def campaign_scenario(args):
             field="uncertainty",
         )
     scenario = parse_scenario({"robot": args.robot, "uncertainty": uncertainty})
-    return scenario.with_overrides(name=Path(args.robot).stem)
+    return scenario.with_overrides(name=robot_display_name(args.robot))
 
 
 def resume_command(args, out: Path) -> str:

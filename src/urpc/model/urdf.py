@@ -145,6 +145,22 @@ def check_mimic_joints(path: Path, locked: Mapping[str, float]) -> None:
         )
 
 
+def robot_display_name(robot: str) -> str:
+    """The name to show for ``robot`` (a URDF path or a robot name): a URDF file's ``<robot
+    name>`` (read from its first element only), else the file stem; a name as given."""
+    import xml.etree.ElementTree as ElementTree
+
+    path = Path(robot)
+    if path.suffix.lower() != ".urdf" or not path.is_file():
+        return path.stem if path.suffix.lower() == ".urdf" else robot
+    try:
+        for _, element in ElementTree.iterparse(path, events=("start",)):
+            return element.get("name") or path.stem
+    except (ElementTree.ParseError, OSError):
+        pass
+    return path.stem
+
+
 #: Largest URDF read [bytes] (the shipped and example-robot-data arms are 5-100 kB).
 MAX_URDF_BYTES = 8 << 20
 
