@@ -20,7 +20,7 @@ from ..formats.uncertainty import JOINT_FIELDS, PHYSICAL_FIELDS
 from .catalog import shipped_file
 from .inertia import inertia_problem
 from .joint_dynamics import JointBox
-from .parameter_box import JOINTS, LinkBox, ParameterBox, physical_coordinates
+from .parameter_box import JOINTS, LinkBox, ParameterBox, link_points, physical_coordinates
 from .robot import Robot
 
 
@@ -209,3 +209,63 @@ def outside_box(
     """Names ``link.field`` / ``joint.field`` of the coordinates of ``point`` that lie outside
     ``box`` (:func:`box_excursions`)."""
     return list(box_excursions(box, point, robot))
+
+
+#: Relative tolerance on the smallest pseudo-inertia eigenvalue (vertices sit on the boundary).
+PSEUDO_INERTIA_TOLERANCE = 1e-12
+#: Uniform draws tried before a box is declared (almost) nowhere a rigid body.
+MAX_DRAWS = 1000
+
+
+def physically_consistent(box: ParameterBox, point: Mapping[str, Any]) -> bool:
+    """Whether every link point of ``point`` is a realizable rigid body: its pseudo-inertia
+    matrix (Pinocchio's ``PseudoInertia``) is positive semi-definite, and a massless point
+    carries no first or second moment either; joint parameters (if any) are ``>= 0``."""
+    import pinocchio as pin
+
+    for name, values in link_points(point).items():
+        parameters = box.link_box(name).standard_parameters(np.asarray(values, dtype=float))
+        if not np.all(np.isfinite(parameters)):
+            return False
+        pseudo = pin.PseudoInertia.FromDynamicParameters(parameters).toMatrix()
+        eigenvalues = np.linalg.eigvalsh(pseudo)
+        scale = max(1.0, float(np.abs(eigenvalues).max()))
+        if eigenvalues[0] < -PSEUDO_INERTIA_TOLERANCE * scale:
+            return False
+        if parameters[0] <= 0 and np.abs(pseudo).max() > PSEUDO_INERTIA_TOLERANCE * scale:
+            return False
+    joints = point.get(JOINTS)
+    return joints is None or bool(np.all(np.asarray(joints) >= 0))
+
+
+def sample_rigid_point(
+    box: ParameterBox, rng: np.random.Generator | int, tries: int = MAX_DRAWS
+) -> tuple[dict[str, np.ndarray], int]:
+    """A point drawn uniformly from the rigid bodies of ``box``: uniform draws from the box,
+    rejected until one is :func:`physically_consistent` (on a box that is partly no rigid body,
+    e.g. wide mass and CoM intervals with a narrow inertia, a plain draw can be none).
+
+    Args:
+        box: The parameter box.
+        rng: A NumPy generator, or a seed.
+        tries: Draws allowed before giving up.
+
+    Returns:
+        The point (as :meth:`ParameterBox.sample`) and the number of draws rejected before it.
+
+    Raises:
+        InputError: no rigid body in ``tries`` draws (the box is almost nowhere physical).
+    """
+    if not isinstance(rng, np.random.Generator):
+        rng = np.random.default_rng(rng)
+    for rejected in range(tries):
+        point = box.sample(rng)
+        if physically_consistent(box, point):
+            return point, rejected
+    raise InputError(
+        f"no physically consistent point in {tries} uniform draws from the box (pseudo-inertia "
+        "not positive semi-definite): tighten the inertia intervals so that the triangle "
+        "inequality holds, or give a true_parameters file",
+        source=box.source,
+        field="links",
+    )

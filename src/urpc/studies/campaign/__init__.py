@@ -35,7 +35,8 @@ Modules: ``draws`` (what each run draws), ``worker`` (one run on a worker), ``ru
 ``figures`` and ``outputs`` (the files, written atomically), ``store`` (the records).
 """
 
-from .draws import MAX_DRAWS, PSEUDO_INERTIA_TOLERANCE, RunSpec, draw_runs, physically_consistent
+from ...model.parameter_point import MAX_DRAWS, PSEUDO_INERTIA_TOLERANCE, physically_consistent
+from .draws import RunSpec, VertexRunsWarning, draw_runs
 from .figures import plot_campaign
 from .outputs import HISTOGRAM_NAME, RUNS_NAME, SUMMARY_NAME, check_writable
 from .result import METRIC_COLUMNS, CampaignResult
@@ -59,6 +60,7 @@ __all__ = [
     "RunOutcome",
     "RunSpec",
     "RunTask",
+    "VertexRunsWarning",
     "check_writable",
     "draw_runs",
     "physically_consistent",

@@ -117,10 +117,13 @@ def run_campaign(
         )
         if store is not None:
             result.save(out)  # still under the folder's lock
-        return result
-    finally:
+    except BaseException:
         if store is not None:
-            store.close()
+            store.discard()  # nothing recorded: nothing left behind
+        raise
+    if store is not None:
+        store.close()
+    return result
 
 
 def campaign_settings(

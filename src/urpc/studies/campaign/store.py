@@ -55,6 +55,7 @@ class CampaignStore:
         self.path = directory / STORE_NAME
         self._connection = connection
         self._lock = lock
+        self._created: list[Path] = []
 
     @classmethod
     def open(cls, directory: str | Path, settings: Mapping[str, Any], *, resume: bool):
@@ -67,6 +68,9 @@ class CampaignStore:
                 the records cannot be read.
         """
         directory = Path(directory)
+        created = [
+            p for p in (directory, directory / LOCK_NAME, directory / STORE_NAME) if not p.exists()
+        ]
         try:
             directory.mkdir(parents=True, exist_ok=True)
             lock = os.open(directory / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o666)
@@ -87,6 +91,7 @@ class CampaignStore:
                     ) from None
             connection = _connect(directory / STORE_NAME)
             store = cls(directory, connection, lock)
+            store._created = created
             store._start(dict(settings), resume)
             return store
         except BaseException:
@@ -145,6 +150,19 @@ class CampaignStore:
                 f"a record of {STORE_NAME} cannot be read ({exc}); delete it to start over",
                 source=self.directory,
             ) from None
+
+    def discard(self) -> None:
+        """Close, and remove what :meth:`open` created if no run was recorded (a campaign that
+        failed before its first run leaves the folder as it found it)."""
+        empty = self.count() == 0
+        self.close()
+        if not empty:
+            return
+        for path in reversed(self._created):
+            try:
+                path.rmdir() if path == self.directory else path.unlink()
+            except OSError:
+                pass
 
     def close(self) -> None:
         """Close the records (folding the WAL back into the file) and release the lock."""
