@@ -61,7 +61,7 @@ _SafeLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 #: is small on disk and huge once expanded). Each is refused with one error before any work.
 MAX_YAML_BYTES = 1 << 20
 MAX_YAML_DEPTH = 32
-MAX_YAML_NODES = 100_000
+MAX_YAML_NODES = 20_000
 
 
 def read_yaml(path: str | Path) -> Any:

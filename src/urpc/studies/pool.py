@@ -76,17 +76,15 @@ def submit_all(pool: concurrent.futures.ProcessPoolExecutor, function, items) ->
 
 def terminate(pool: concurrent.futures.ProcessPoolExecutor) -> None:
     """Cancel the pending tasks of ``pool`` and terminate its workers without waiting for the
-    running tasks (Python 3.14's ``terminate_workers``, or the same by hand before it)."""
-    stop = getattr(pool, "terminate_workers", None)
+    running tasks (Python 3.14's ``kill_workers``, or the same by hand before it)."""
+    stop = getattr(pool, "kill_workers", None)
     if stop is not None:
         stop()
         return
     processes = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
-    for process in processes:
-        if process.is_alive():
-            process.terminate()
-    for process in processes:
-        process.join(timeout=2.0)
+    for process in processes:  # SIGKILL: a worker holds nothing to clean up (the parent records)
         if process.is_alive():
             process.kill()
+    for process in processes:
+        process.join(timeout=1.0)
