@@ -82,3 +82,18 @@ def test_captured_stderr_takes_what_is_written_on_descriptor_2(capfd):
         os.write(2, b"Error:   something native\n   at line 1\n")
     assert captured.first_line == "something native"
     assert capfd.readouterr().err == ""
+
+
+@pytest.mark.parametrize(
+    "filename", ["package://nowhere/arm.stl", "$(find arm)/meshes/arm.stl", "meshes/none.stl"]
+)
+def test_missing_meshes_are_named_by_the_mujoco_plant(filename, tmp_path, capsys):
+    pytest.importorskip("mujoco")
+    link = '<link name="link2">'
+    mesh = f'<visual><geometry><mesh filename="{filename}"/></geometry></visual>'
+    (tmp_path / "arm.urdf").write_text(RR_URDF.replace(link, link + mesh, 1))
+    (tmp_path / "box.yaml").write_text("links: {link2: {mass: [5, 10]}}\n")
+    argv = ["simulate", "--robot", str(tmp_path / "arm.urdf"), "-u", str(tmp_path / "box.yaml")]
+    assert main([*argv, "--plant", "mujoco", "--duration", "0.01", "--json"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("warning: ") and filename in err

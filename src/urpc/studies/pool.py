@@ -16,6 +16,7 @@ import os
 import signal
 import threading
 import time
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -25,6 +26,9 @@ PARENT_POLL = 0.5
 
 def _worker_start(parent: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides; it terminates us
+    # The parent builds the same scenario first and reports its warnings once, in one line each;
+    # a worker's copies would arrive in Python's multi-line format, once per worker.
+    warnings.simplefilter("ignore")
     if hasattr(signal, "pthread_sigmask"):  # blocked by submit_all while this process started
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
