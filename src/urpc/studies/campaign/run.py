@@ -117,6 +117,7 @@ def run_campaign(
         )
         if store is not None:
             result.save(out)  # still under the folder's lock
+            store.mark_finished()
     except BaseException:
         if store is not None:
             store.discard()  # nothing recorded: nothing left behind

@@ -12,8 +12,9 @@ finished run and can resume.
 * **Settings.** The first row of ``settings`` holds what determines the runs (the scenario's
   document, seed, run count, initial spread, vertex runs, urpc's version); ``--resume`` continues
   only a campaign with the same settings and names what differs otherwise.
-* **Replacing.** A new campaign on a folder whose campaign finished replaces it (as any new run
-  replaces earlier outputs); an interrupted one is kept until it is resumed or deleted.
+* **Replacing.** A new campaign on a folder whose campaign finished (its outputs written)
+  replaces it, as any new run replaces earlier outputs; an interrupted one (even with every run
+  recorded, killed before its outputs) is kept until it is resumed or deleted.
 * **One campaign per folder.** ``DIR/campaign.lock`` is held with ``fcntl.flock`` while the
   campaign runs (the kernel releases it when the process dies, even by SIGKILL); a second
   campaign on the same folder is refused at start, naming the folder.
@@ -103,12 +104,13 @@ class CampaignStore:
         row = self._query("SELECT value FROM settings WHERE key = 'campaign'").fetchone()
         done = self.count()
         recorded = _runs(row[0]) if row is not None else 0
-        complete = isinstance(recorded, int) and done >= recorded
+        finished = self._query("SELECT 1 FROM settings WHERE key = 'finished'").fetchone()
         # Nothing recorded yet, or a finished campaign (its outputs written) that a new one
         # replaces, as a new run replaces any output: (re)start with these settings.
-        if row is None or done == 0 or (complete and not resume):
+        if row is None or done == 0 or (finished is not None and not resume):
             with self._connection:
                 self._connection.execute("DELETE FROM runs")
+                self._connection.execute("DELETE FROM settings WHERE key = 'finished'")
                 self._connection.execute(
                     "INSERT OR REPLACE INTO settings VALUES ('campaign', ?)", (text,)
                 )
@@ -129,6 +131,11 @@ class CampaignStore:
                 + "); resume with the recorded settings, or give another --out",
                 source=self.directory,
             )
+
+    def mark_finished(self) -> None:
+        """Record that the campaign's outputs are written (a new campaign may then replace it)."""
+        with self._connection:
+            self._connection.execute("INSERT OR REPLACE INTO settings VALUES ('finished', '1')")
 
     def count(self) -> int:
         return int(self._query("SELECT COUNT(*) FROM runs").fetchone()[0])
