@@ -167,6 +167,20 @@ CASES: dict[str, Case] = {
     "box_joint_nominal_outside": _box_case("joints: {joint1: {damping: [1, 2], nominal: {damping: 3}}}", "joints.joint1.damping", "outside the box", "nominal"),
     "box_joint_negative_nominal": _box_case("joints: {joint1: {nominal: {friction: -1}}}", "joints.joint1.nominal.friction", ">= 0"),
     "box_joint_relative_lo_gt_hi": _box_case("joints: {joint1: {friction: [2, 1]}}", "joints.joint1.friction", "greater than"),
+    # ------------------------------------------------- issue 21: hostile and unchecked inputs
+    "point_joints_without_box_section": Case({"point.yaml": "joints: {joint1: {friction: 0.5}}"}, ["simulate", "--robot", "rr_planar", "--true-params", "{tmp}/point.yaml", "--duration", "0.01"], lambda tmp: urpc.load_parameter_point(tmp / "point.yaml", urpc.load_robot("rr_planar"), urpc.load_uncertainty("rr_planar", urpc.load_robot("rr_planar"))), ("joints.joint1.friction", "no 'joints:' section")),
+    "simulate_out_unwritable_for_root_too": Case({}, ["simulate", "rr_planar/s3_ic1", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
+    "campaign_out_unwritable_for_root_too": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "2", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
+    "campaign_neither_scenario_nor_robot": Case({}, ["campaign", "--runs", "2"], None, ("give a scenario file", "--robot"), names_file=""),
+    "urdf_revolute_without_limit": _urdf_case(_rr_with('<limit lower="-6.283185307179586" upper="6.283185307179586" effort="1000" velocity="20"/>', ""), "joint.joint1.limit", "no <limit>", "continuous"),
+    "urdf_limit_without_effort": _urdf_case(_rr_with('effort="1000" velocity="20"', 'velocity="20"'), "Pinocchio cannot parse", "limit has no effort"),
+    "box_yaml_alias_bomb": _box_case("links:\n  link2:\n    com_x: [&a [x, x, x, x, x, x, x, x, x, x], &b [*a, *a, *a, *a, *a, *a, *a, *a, *a, *a], &c [*b, *b, *b, *b, *b, *b, *b, *b, *b, *b], &d [*c, *c, *c, *c, *c, *c, *c, *c, *c, *c], &e [*d, *d, *d, *d, *d, *d, *d, *d, *d, *d], &f [*e, *e, *e, *e, *e, *e, *e, *e, *e, *e]]\n", "aliases", "more than"),
+    "box_yaml_too_deep": _box_case("links: " + "[" * 40 + "]" * 40, "nested deeper than"),
+    "negative_epsilon_reaches_urpc": Case({}, ["simulate", "rr_planar/s3_ic1", "--epsilon", "-1e-2"], None, ("epsilon must be > 0", "-1e-2"), names_file=""),
+    "negative_percentage_reaches_urpc": Case({}, ["init", "rr_planar", "--out", "{tmp}/box.yaml", "--mass", "-5%"], None, ("--mass", "'-5%' must lie in [0%, 100%)"), names_file=""),
+    "negative_runs_reaches_urpc": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "-2"], None, ("--runs", "'-2' must be an integer >= 1"), names_file=""),
+    "box_joint_relative_width_of_zero": _box_case("joints: {joint1: {friction: 50%}}", "joints.joint1.friction", "nominal friction of 0", "no width at all", "[0, 1]"),
+    "box_joint_relative_armature_of_zero": _box_case("joints: {joint2: {armature: 10%}}", "joints.joint2.armature", "URDFs carry no armature"),
     # ------------------------------------------------------------ API mistakes (issue 10.6)
     "box_for_another_robot": Case({}, _check("ur5", str(RR_DIR / "uncertainty.yaml")), lambda tmp: urpc.load_uncertainty("rr_planar", urpc.load_robot("ur5")), ("this box is for robot 'rr_planar'", "not for 'ur5'", "field 'robot'"), names_file="uncertainty.yaml"),
     # ---------------------------------------------------------------- states and methods

@@ -13,6 +13,7 @@ import sys
 import warnings
 from collections.abc import Sequence
 
+from .. import __version__
 from ..errors import UrpcError
 from . import (
     bench,
@@ -44,8 +45,8 @@ def build_parser() -> argparse.ArgumentParser:
         ),
         epilog="Exit codes: 0 success, 2 bad input. Docs: docs/ in the source tree.",
     )
+    parser.add_argument("--version", action="version", version=f"urpc {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
-    commands.required = True
     for module in COMMAND_MODULES:
         module.register(commands)
     return parser
@@ -56,6 +57,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
+        if args.command is None:  # a bare `urpc`: the command list, as `urpc --help`
+            parser.print_help()
+            return EXIT_OK
         with warnings.catch_warnings():
             warnings.showwarning = _print_warning
             return args.handler(args)

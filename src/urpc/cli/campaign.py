@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import shlex
+import sys
 from pathlib import Path
 
 from ..control import SAMPLED_LAWS
+from ..errors import InputError
 from .common import (
     EXIT_OK,
     RESULTS_ROOT,
+    ROBOT_HELP,
+    UNCERTAINTY_HELP,
     add_output_arguments,
     count,
     non_negative_float,
@@ -19,6 +24,9 @@ from .common import (
     show_progress,
     warn_uncertified,
 )
+
+#: Exit code of an interrupted campaign (128 + SIGINT, as a shell reports it).
+EXIT_INTERRUPTED = 130
 
 
 def register(commands) -> None:
@@ -32,14 +40,24 @@ def register(commands) -> None:
         "draws; physically consistent points only), disturbance seed and initial offset (uniform "
         "within +-IC_SPREAD epsilon per joint), in parallel on local processes or on a Dask "
         "cluster. Writes DIR/runs.csv (one row per run), DIR/summary.json and "
-        "DIR/histogram.png. The same seed gives the same draws and results, whatever the "
-        "number of workers.",
+        "DIR/histogram.png, built from DIR/runs.sqlite, where each run is recorded as it "
+        "finishes. The same seed gives the same draws and results, whatever the number of "
+        "workers. Ctrl-C stops the workers at once and keeps the finished runs; --resume "
+        "continues an interrupted (or killed) campaign with the same settings, with results "
+        "identical to an uninterrupted one. One campaign at a time per DIR (a lock).",
     )
     p.add_argument(
         "scenario",
+        nargs="?",
         metavar="SCENARIO",
-        help="scenario YAML file or shipped name (rr_planar/s1_ic1 ...)",
+        help="scenario YAML file or shipped name (rr_planar/s1_ic1 ...); omit with --robot",
     )
+    p.add_argument(
+        "--robot",
+        metavar="ROBOT",
+        help=ROBOT_HELP + "; as in simulate, replaces or stands in for SCENARIO",
+    )
+    p.add_argument("--uncertainty", "-u", metavar="FILE", help=UNCERTAINTY_HELP)
     p.add_argument("--runs", type=positive_int, required=True, metavar="N", help="number of runs")
     where = p.add_mutually_exclusive_group()
     where.add_argument(
@@ -77,40 +95,112 @@ def register(commands) -> None:
         metavar="N",
         help="number of vertex runs (default: every vertex if they fit, else RUNS/2)",
     )
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the campaign recorded in DIR (the same settings), running only the runs "
+        "not yet recorded",
+    )
     add_output_arguments(
-        p, str(RESULTS_ROOT / "campaign" / "SCENARIO"), what="runs, summary and histogram"
+        p, str(RESULTS_ROOT / "campaign" / "SCENARIO"), what="records, runs, summary and histogram"
     )
     p.set_defaults(handler=run_campaign_command)
 
 
 def run_campaign_command(args) -> int:
-    from ..studies.campaign import run_campaign
-    from ..studies.scenario import load_scenario
+    from ..studies.campaign import CampaignInterrupted, run_campaign
 
     law = args.sampled_law
     options = None if law is None else {"interval": {"sampled_law": law}}
-    scenario = load_scenario(args.scenario).with_overrides(
+    scenario = campaign_scenario(args).with_overrides(
         duration=args.duration, plant=args.plant, controller_options=options
     )
     out = output_folder(args.out, default_out(scenario.name))  # before any work
-    result = run_campaign(
-        scenario,
-        args.runs,
-        workers=2 if args.workers is None else args.workers,
-        scheduler=args.scheduler,
-        seed=args.seed,
-        progress=show_progress(args),
-        ic_spread=args.ic_spread,
-        vertex_runs=args.vertex_runs,
-    )
+    try:
+        result = run_campaign(
+            scenario,
+            args.runs,
+            workers=2 if args.workers is None else args.workers,
+            scheduler=args.scheduler,
+            seed=args.seed,
+            progress=show_progress(args),
+            ic_spread=args.ic_spread,
+            vertex_runs=args.vertex_runs,
+            out=out,
+            resume=args.resume,
+        )
+    except CampaignInterrupted as stop:
+        print(
+            f"error: interrupted; {stop.done} of {stop.total} runs are recorded in "
+            f"{out / 'runs.sqlite'}; continue with: {resume_command(args, out)}",
+            file=sys.stderr,
+        )
+        return EXIT_INTERRUPTED
     warn_uncertified(result.certificate)
-    result.save(out)
     summary = result.summary()
     if args.json:
         print_json({**summary, "out": str(out)})
         return EXIT_OK
     print("\n".join(describe_summary(summary, out)))
     return EXIT_OK
+
+
+def campaign_scenario(args):
+    """The campaign's scenario: SCENARIO, or ``--robot`` with ``--uncertainty`` (default: the
+    robot's shipped box), as in ``simulate``; with SCENARIO, ``--robot``/``--uncertainty``
+    override its own."""
+    from ..model.catalog import default_uncertainty, resolve_robot
+    from ..model.urdf import robot_display_name
+    from ..studies.scenario import load_scenario, parse_scenario
+
+    uncertainty = args.uncertainty
+    if args.robot is not None and uncertainty is None:
+        resolve_robot(args.robot)  # an unknown name: say so, with the closest one
+        shipped = default_uncertainty(args.robot)
+        uncertainty = None if shipped is None else str(shipped)
+    if args.scenario is not None:
+        return load_scenario(args.scenario).with_overrides(
+            robot=args.robot, uncertainty=uncertainty
+        )
+    if args.robot is None:
+        raise InputError(
+            "give a scenario file (or a shipped name such as rr_planar/s3_ic1) or --robot "
+            "(see 'urpc campaign --help')",
+            field="scenario",
+        )
+    if uncertainty is None:
+        raise InputError(
+            f"robot '{args.robot}' has no shipped uncertainty box; write one with "
+            f"'urpc init {args.robot} --out box.yaml' and give --uncertainty box.yaml",
+            field="uncertainty",
+        )
+    scenario = parse_scenario({"robot": args.robot, "uncertainty": uncertainty})
+    return scenario.with_overrides(name=robot_display_name(args.robot))
+
+
+def resume_command(args, out: Path) -> str:
+    """The command line that continues this campaign: its settings, ``--out`` and ``--resume``."""
+    argv = ["urpc", "campaign"]
+    if args.scenario is not None:
+        argv.append(args.scenario)
+    options = {
+        "--robot": args.robot,
+        "--uncertainty": args.uncertainty,
+        "--runs": args.runs,
+        "--workers": args.workers,
+        "--scheduler": args.scheduler,
+        "--seed": args.seed,
+        "--duration": args.duration,
+        "--plant": args.plant,
+        "--sampled-law": args.sampled_law,
+        "--ic-spread": args.ic_spread,
+        "--vertex-runs": args.vertex_runs,
+        "--out": out,
+    }
+    for option, value in options.items():
+        if value is not None:
+            argv += [option, repr(value) if isinstance(value, float) else str(value)]
+    return shlex.join([*argv, "--resume"])
 
 
 def default_out(scenario_name: str) -> Path:
@@ -148,6 +238,7 @@ def describe_summary(summary: dict, out: Path) -> list[str]:
     lines += [
         f"  wall time            {summary['wall_time']:.1f} s on {where} "
         f"({summary['runs_per_minute']:.1f} runs/min)",
-        f"  outputs              {out}/{{runs.csv, summary.json, histogram.png}}",
+        f"  outputs              {out}/{{runs.csv, summary.json, histogram.png}} (records: "
+        "runs.sqlite)",
     ]
     return lines

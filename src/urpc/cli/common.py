@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -38,8 +39,20 @@ CONTROLLERS = ("interval", "r-alpha", "computed-torque")
 BOUND_METHODS = ("vertex", "hull", "rigorous")
 
 
+#: What argparse must read as a (negative) value, not as an option: ``-5``, ``-0.1``, ``-1e-2``,
+#: ``-5%``, ``-0.1,0.2`` (argparse's own pattern misses exponents, percent signs and lists, and
+#: answers "expected one argument" instead of the option's own check). No option of urpc starts
+#: with a dash and a digit.
+NEGATIVE_VALUE = re.compile(r"^-\.?\d[\d.eE+\-,% ]*$")
+
+
 class Parser(argparse.ArgumentParser):
-    """argparse with the package's error contract: one ``error:`` line, exit code 2."""
+    """argparse with the package's error contract: one ``error:`` line, exit code 2; negative
+    numbers are values (:data:`NEGATIVE_VALUE`), answered by the option's own check."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_VALUE
 
     def error(self, message: str):  # type: ignore[override]
         raise InputError(f"{message} (see '{self.prog} --help')")

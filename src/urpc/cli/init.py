@@ -15,6 +15,11 @@ DEFAULT_COM = 0.01
 DEFAULT_INERTIA = "20%"
 
 
+def _escaped(text: str) -> str:
+    """``text`` for an argparse help string, where ``%`` starts a format."""
+    return text.replace("%", "%%")
+
+
 def register(commands) -> None:
     p = commands.add_parser(
         "init",
@@ -36,7 +41,7 @@ def register(commands) -> None:
         type=percentage,
         default=percentage(DEFAULT_MASS),
         metavar="PCT",
-        help=f"relative half-width of every link mass, e.g. 10%% (default {DEFAULT_MASS})",
+        help=f"relative half-width of every link mass, e.g. 10%% (default {_escaped(DEFAULT_MASS)})",
     )
     p.add_argument(
         "--com",
@@ -51,7 +56,7 @@ def register(commands) -> None:
         default=percentage(DEFAULT_INERTIA),
         metavar="PCT",
         help="relative half-width of every inertia entry about the center of mass, e.g. 20%% "
-        f"(default {DEFAULT_INERTIA})",
+        f"(default {_escaped(DEFAULT_INERTIA)})",
     )
     p.add_argument(
         "--payload",

@@ -178,9 +178,11 @@ def run_simulate(args) -> int:
     if out is not None:
         import yaml
 
-        from ..sim.results import write_files
+        from ..sim.results import SUMMARY_NAME, write_files
 
         writers = result.writers(csv=True)
+        summary_text = json_text(summary) + "\n"  # what --json prints: certified included
+        writers[SUMMARY_NAME] = lambda path: path.write_text(summary_text)
         guarantee_text = json_text(guarantee)
         writers["certificate.json"] = lambda path: path.write_text(guarantee_text)
         document = yaml.safe_dump(scenario.to_dict(), sort_keys=False)
@@ -212,6 +214,7 @@ def scenario_from_arguments(args):
     """The scenario of a ``simulate`` command line: the file (or a robot and its box) with every
     given flag as an override (:meth:`urpc.studies.scenario.Scenario.with_overrides`)."""
     from ..model.catalog import default_uncertainty, resolve_robot
+    from ..model.urdf import robot_display_name
     from ..studies.scenario import load_scenario, parse_scenario
 
     uncertainty = args.uncertainty
@@ -235,7 +238,7 @@ def scenario_from_arguments(args):
         )
     else:
         scenario = parse_scenario({"robot": args.robot, "uncertainty": uncertainty})
-        scenario = scenario.with_overrides(name=Path(args.robot).stem)
+        scenario = scenario.with_overrides(name=robot_display_name(args.robot))
     torque_limit = args.torque_limit
     if torque_limit is not None and "," in torque_limit:
         torque_limit = names(torque_limit)

@@ -217,9 +217,8 @@ class IntervalPassivityController(Controller):
         shifted = pin.crba(lower.model, lower.data, lower.configuration(q))
         shifted.flat[:: self._stride] += step  # the diagonal (half the time of fancy indexing)
         _, y, info = dposv(shifted, r, lower=0)
-        if info != 0:  # M_L + D T 1 is not positive definite (an indefinite M_L): general solve
-            inertia = lower.M(q)
-            return gain * np.linalg.solve(inertia + step * self._identity, inertia @ r)
+        if info != 0:  # M_L + D T 1 is not positive definite: M_L is indefinite at q
+            return implicit_feedback(positive_part(lower.M(q)), gain, step, r)
         return gain * (r - step * y)
 
     def state_derivative(
@@ -256,3 +255,32 @@ class IntervalPassivityController(Controller):
         """``phi`` [N m s/rad] and ``kappa`` [s/rad] at this state."""
         phi, kappa = self.gains(state)
         return {"phi": phi, "kappa": kappa}
+
+
+#: Floor of the eigenvalues of :func:`positive_part`, relative to the largest one.
+POSITIVE_FLOOR = 1e-3
+
+
+def positive_part(inertia: np.ndarray, floor: float = POSITIVE_FLOOR) -> np.ndarray:
+    """``inertia`` with its eigenvalues raised to at least ``floor * lambda_max`` [kg m^2].
+
+    A box that is partly no rigid body (wide mass and CoM intervals with narrow inertias) can
+    give a lower bound ``M_L`` that is not positive definite at some ``q``. The implicit feedback
+    ``D (M_L + D T 1)^{-1} M_L r`` is then singular where ``D T = -lambda`` for a negative
+    eigenvalue ``lambda`` and changes sign beyond: the gain the adaptation reaches blows the law
+    up. On a mode the predicted inertia ``lambda_0`` only needs ``0 < lambda_0 <= lambda_true``
+    for the loop factor ``1 - lambda_0 / lambda_true`` to contract, so a small positive floor in
+    the directions where ``M_L`` fails is the cautious choice: the feedback there saturates at
+    ``lambda_0 / T`` instead of diverging (the certificate reports such a box as not certified).
+    """
+    eigenvalues, vectors = np.linalg.eigh(inertia)
+    top = float(eigenvalues[-1])
+    least = floor * top if top > 0 else floor
+    clamped = np.maximum(eigenvalues, least)
+    return (vectors * clamped) @ vectors.T
+
+
+def implicit_feedback(inertia: np.ndarray, gain: float, step: float, r: np.ndarray) -> np.ndarray:
+    """``D (M + D T 1)^{-1} M r`` [N m] with ``D = gain`` and ``D T = step``, by a general
+    solve (the fallback of the Cholesky path for an ``inertia`` made positive definite)."""
+    return gain * np.linalg.solve(inertia + step * np.eye(len(r)), inertia @ r)

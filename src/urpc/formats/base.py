@@ -56,14 +56,38 @@ class FileFormat(BaseModel):
 _SafeLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
+#: Limits on a data file (boxes, points, scenarios, modules: a few kB each when shipped): its
+#: size [bytes], its nesting depth, and its node count with every alias expanded (an alias bomb
+#: is small on disk and huge once expanded). Each is refused with one error before any work.
+MAX_YAML_BYTES = 1 << 20
+MAX_YAML_DEPTH = 32
+MAX_YAML_NODES = 20_000
+
+
 def read_yaml(path: str | Path) -> Any:
-    """Load a YAML file, turning every I/O or syntax problem into an :class:`InputError`."""
+    """Load a YAML file, turning every I/O or syntax problem into an :class:`InputError`.
+
+    Hostile files are refused before they are built: more than :data:`MAX_YAML_BYTES`, nesting
+    deeper than :data:`MAX_YAML_DEPTH`, or more than :data:`MAX_YAML_NODES` nodes once the
+    aliases are expanded (counted on the event stream, without expanding anything).
+    """
     path = Path(path)
     if not path.is_file():
         raise InputError("file does not exist", source=path)
     try:
-        with path.open() as stream:
-            return yaml.load(stream, Loader=_SafeLoader)
+        with path.open("rb") as stream:
+            data = stream.read(MAX_YAML_BYTES + 1)
+        if len(data) > MAX_YAML_BYTES:
+            size = path.stat().st_size
+            raise InputError(
+                f"the file is too large for a data file ({size / 2**20:.3g} MiB; at most "
+                f"{MAX_YAML_BYTES // 2**20} MiB): give the uncertainty, scenario or module "
+                "file itself",
+                source=path,
+            )
+        text = data.decode("utf-8")
+        _check_yaml_size(text, path)
+        return yaml.load(text, Loader=_SafeLoader)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
@@ -71,6 +95,46 @@ def read_yaml(path: str | Path) -> Any:
         raise InputError(f"YAML syntax error{where}: {problem}", source=path) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read the file ({exc})", source=path) from None
+
+
+def _check_yaml_size(text: str, path: Path) -> None:
+    """Refuse a document nested deeper than :data:`MAX_YAML_DEPTH` or with more than
+    :data:`MAX_YAML_NODES` nodes once its aliases are expanded, from its event stream: each
+    node's expanded size is summed into its parent, an anchor remembers the size of its node and
+    an alias adds it again, so nothing is built or expanded."""
+    anchors: dict[str, int] = {}
+    stack: list[list] = [[0, None]]  # per open collection: [expanded size, anchor]
+    total = 0
+    for event in yaml.parse(text, Loader=_SafeLoader):
+        if isinstance(event, yaml.CollectionStartEvent):
+            stack.append([1, event.anchor])
+            if len(stack) - 1 > MAX_YAML_DEPTH:
+                line = event.start_mark.line + 1 if event.start_mark else "?"
+                raise InputError(
+                    f"the YAML is nested deeper than {MAX_YAML_DEPTH} levels (line {line}); "
+                    "a data file needs a few",
+                    source=path,
+                )
+            continue
+        if isinstance(event, yaml.CollectionEndEvent):
+            size, anchor = stack.pop()
+        elif isinstance(event, yaml.ScalarEvent):
+            size, anchor = 1, event.anchor
+        elif isinstance(event, yaml.AliasEvent):
+            size, anchor = anchors.get(event.anchor, 1), None
+        else:
+            continue
+        if anchor is not None:
+            anchors[anchor] = size
+        stack[-1][0] += size
+        total = stack[0][0]
+        if total > MAX_YAML_NODES or size > MAX_YAML_NODES:
+            expanded = " once its aliases (*name) are expanded" if anchors else ""
+            raise InputError(
+                f"the YAML holds more than {MAX_YAML_NODES} values{expanded}; a data file "
+                "holds a few hundred (an alias bomb?)",
+                source=path,
+            )
 
 
 def validate(

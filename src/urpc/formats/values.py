@@ -177,6 +177,13 @@ class Interval:
     def absolute(self) -> bool:
         return self.lower.form == self.upper.form == "absolute"
 
+    def vanishes_at(self, nominal: float) -> bool:
+        """Whether a relative width (``10%``, ``[-5%, +5%]``) collapses to nothing because the
+        nominal it is relative to is 0 (a width the writer meant, which is not there)."""
+        return nominal == 0 and any(
+            end.form in ("percent", "width") and end.value != 0 for end in (self.lower, self.upper)
+        )
+
     def around(self, nominal: float | None) -> tuple[float, float]:
         """``(lo, hi)`` around ``nominal`` (``None``: only absolute forms are allowed).
 

@@ -233,6 +233,21 @@ def resolve_joint_box(
                 lo, hi = interval.around(center)
             except ValueError as exc:
                 raise InputError(str(exc), source=source, field=fieldname) from None
+            if interval.vanishes_at(center):
+                where = (
+                    "nominal:"
+                    if key in given
+                    else "the default: URDFs carry no armature"
+                    if key == "armature"
+                    else "the URDF's <dynamics>, or none"
+                )
+                raise InputError(
+                    f"{interval.text} of a nominal {key} of 0 (from {where}) is no width at all: "
+                    f"the {key} would be exactly 0; give an absolute interval, e.g. {key}: "
+                    f"[0, 1] {JOINT_UNITS[key]}, or a nonzero nominal: {{{key}: ...}}",
+                    source=source,
+                    field=fieldname,
+                )
             if lo < 0:
                 raise InputError(
                     f"{key} interval [{lo:.6g}, {hi:.6g}] {JOINT_UNITS[key]} has a negative lower "

@@ -6,6 +6,7 @@ ParameterPointFile`); what is not given stays nominal.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -15,10 +16,11 @@ import numpy as np
 from ..errors import InputError, did_you_mean
 from ..formats.base import read_yaml, validate
 from ..formats.parameter_point import LinkPoint, ParameterPointFile, PayloadPoint
-from ..formats.uncertainty import JOINT_FIELDS
+from ..formats.uncertainty import JOINT_FIELDS, PHYSICAL_FIELDS
 from .catalog import shipped_file
 from .inertia import inertia_problem
-from .parameter_box import JOINTS, LinkBox, ParameterBox, physical_coordinates
+from .joint_dynamics import JointBox
+from .parameter_box import JOINTS, LinkBox, ParameterBox, link_points, physical_coordinates
 from .robot import Robot
 
 
@@ -74,6 +76,7 @@ def load_parameter_point(
         if not box.payloads:
             raise InputError("this uncertainty box has no payload", source=source, field="payload")
         entries[box.payloads[0].name] = spec.payload
+    _refuse_what_the_box_lacks(spec, nominal_robot, box, source)
     point: dict[str, np.ndarray] = {}
     for name, entry in entries.items():
         fieldname = "payload" if isinstance(entry, PayloadPoint) else f"links.{name}"
@@ -85,7 +88,7 @@ def load_parameter_point(
             )
         try:
             link_box = box.link_box(name)
-        except KeyError:
+        except KeyError:  # exact for the controller: the point may move it (outside the box)
             nominal = physical_coordinates(nominal_robot.link(name).inertia)
             link_box = LinkBox(name, "physical", nominal, nominal, nominal)
         barycentric = getattr(entry, "barycentric", None) is not None
@@ -116,6 +119,30 @@ def load_parameter_point(
     return point
 
 
+def _refuse_what_the_box_lacks(
+    spec: ParameterPointFile, nominal_robot: Robot, box: ParameterBox, source: str
+) -> None:
+    """Refuse joint values for a box without a ``joints:`` section: the controller then has no
+    drive model at all (rigid joints), so the values cannot be checked against an interval and
+    would silently change the plant. (A link the box does not list is exact for the controller:
+    its values are accepted and recorded outside the box when they differ, :func:`box_excursions`.)
+    """
+    if spec.joints and box.joints is None:
+        fields = ", ".join(
+            f"joints.{joint}.{key}"
+            for joint, entry in spec.joints.items()
+            for key in entry.values()
+        )
+        raise InputError(
+            f"the box ({box.source or 'given'}) has no 'joints:' section, so the joint drives "
+            f"are exact for the controller; this point gives {fields or 'joints:'}: add a "
+            "'joints:' section to the box (e.g. joints: {JOINT: {friction: [0, 1]}}) or remove "
+            "joints: from the point",
+            source=source,
+            field="joints",
+        )
+
+
 def _joint_point(
     spec: ParameterPointFile, nominal_robot: Robot, box: ParameterBox, source: str
 ) -> np.ndarray:
@@ -134,24 +161,111 @@ def _joint_point(
     return values
 
 
-def outside_box(box: ParameterBox, point: Mapping[str, np.ndarray]) -> list[str]:
-    """Names ``link.field`` of the coordinates of ``point`` that lie outside ``box``."""
-    outside = []
+def box_excursions(
+    box: ParameterBox, point: Mapping[str, np.ndarray], robot: Robot | None = None
+) -> dict[str, float]:
+    """``link.field`` or ``joint.field`` -> distance [SI] outside ``box`` of each coordinate of
+    ``point`` that is not in it (rounding of 1e-12 relative tolerated): links, payloads and the
+    joint drives alike.
+
+    Values the box has no interval for (a link it does not list, drives without a ``joints:``
+    section) are exact for the controller: with ``robot`` (the controller's nominal model) they
+    are compared with its values; without it, each such entry counts as outside (distance inf).
+    """
+    excursions: dict[str, float] = {}
+
+    def record(names, values, lower, upper) -> None:
+        values = np.asarray(values, dtype=float)
+        tolerance = 1e-12 * np.maximum(1.0, np.abs(values))
+        distance = np.maximum(lower - values, values - upper)
+        for index in zip(*np.nonzero(~(distance <= tolerance)), strict=True):
+            gap = float(distance[index])
+            excursions[names(*index)] = gap if math.isfinite(gap) else math.inf
+
+    boxed = {b.link: b for b in box.links}
     for name, values in point.items():
         if name == JOINTS:
             joints = box.joints
-            if joints is not None:
-                rows, columns = np.nonzero(
-                    (values < joints.lower - 1e-12) | (values > joints.upper + 1e-12)
-                )
-                outside += [joints.name(r, c) for r, c in zip(rows, columns, strict=True)]
-            continue
-        try:
-            link_box = box.link_box(name)
-        except KeyError:
-            continue
-        for k in np.flatnonzero(
-            (values < link_box.lower - 1e-12) | (values > link_box.upper + 1e-12)
-        ):
-            outside.append(f"{name}.{link_box.fields[k]}")
-    return outside
+            if joints is None and robot is not None:
+                joints = JointBox.exact(robot.joint_names, robot.joint_parameters)
+            if joints is None:
+                excursions[JOINTS] = math.inf
+            else:
+                record(joints.name, values, joints.lower, joints.upper)
+        elif name in boxed:
+            b = boxed[name]
+            record(lambda k, b=b: f"{b.link}.{b.fields[k]}", values, b.lower, b.upper)
+        elif robot is not None and name in robot.link_names:
+            nominal = physical_coordinates(robot.link(name).inertia)
+            record(lambda k, n=name: f"{n}.{PHYSICAL_FIELDS[k]}", values, nominal, nominal)
+        else:
+            excursions[name] = math.inf
+    return excursions
+
+
+def outside_box(
+    box: ParameterBox, point: Mapping[str, np.ndarray], robot: Robot | None = None
+) -> list[str]:
+    """Names ``link.field`` / ``joint.field`` of the coordinates of ``point`` that lie outside
+    ``box`` (:func:`box_excursions`)."""
+    return list(box_excursions(box, point, robot))
+
+
+#: Relative tolerance on the smallest pseudo-inertia eigenvalue (vertices sit on the boundary).
+PSEUDO_INERTIA_TOLERANCE = 1e-12
+#: Uniform draws tried before a box is declared (almost) nowhere a rigid body.
+MAX_DRAWS = 1000
+
+
+def physically_consistent(box: ParameterBox, point: Mapping[str, Any]) -> bool:
+    """Whether every link point of ``point`` is a realizable rigid body: its pseudo-inertia
+    matrix (Pinocchio's ``PseudoInertia``) is positive semi-definite, and a massless point
+    carries no first or second moment either; joint parameters (if any) are ``>= 0``."""
+    import pinocchio as pin
+
+    for name, values in link_points(point).items():
+        parameters = box.link_box(name).standard_parameters(np.asarray(values, dtype=float))
+        if not np.all(np.isfinite(parameters)):
+            return False
+        pseudo = pin.PseudoInertia.FromDynamicParameters(parameters).toMatrix()
+        eigenvalues = np.linalg.eigvalsh(pseudo)
+        scale = max(1.0, float(np.abs(eigenvalues).max()))
+        if eigenvalues[0] < -PSEUDO_INERTIA_TOLERANCE * scale:
+            return False
+        if parameters[0] <= 0 and np.abs(pseudo).max() > PSEUDO_INERTIA_TOLERANCE * scale:
+            return False
+    joints = point.get(JOINTS)
+    return joints is None or bool(np.all(np.asarray(joints) >= 0))
+
+
+def sample_rigid_point(
+    box: ParameterBox, rng: np.random.Generator | int, tries: int = MAX_DRAWS
+) -> tuple[dict[str, np.ndarray], int]:
+    """A point drawn uniformly from the rigid bodies of ``box``: uniform draws from the box,
+    rejected until one is :func:`physically_consistent` (on a box that is partly no rigid body,
+    e.g. wide mass and CoM intervals with a narrow inertia, a plain draw can be none).
+
+    Args:
+        box: The parameter box.
+        rng: A NumPy generator, or a seed.
+        tries: Draws allowed before giving up.
+
+    Returns:
+        The point (as :meth:`ParameterBox.sample`) and the number of draws rejected before it.
+
+    Raises:
+        InputError: no rigid body in ``tries`` draws (the box is almost nowhere physical).
+    """
+    if not isinstance(rng, np.random.Generator):
+        rng = np.random.default_rng(rng)
+    for rejected in range(tries):
+        point = box.sample(rng)
+        if physically_consistent(box, point):
+            return point, rejected
+    raise InputError(
+        f"no physically consistent point in {tries} uniform draws from the box (pseudo-inertia "
+        "not positive semi-definite): tighten the inertia intervals so that the triangle "
+        "inequality holds, or give a true_parameters file",
+        source=box.source,
+        field="links",
+    )

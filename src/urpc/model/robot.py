@@ -19,6 +19,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import InputError, did_you_mean
+from ..native import captured_stderr
 from .catalog import resolve_robot
 
 # inertia_problem: also imported from here by uncertainty, modular and studies.scenario.
@@ -331,10 +332,16 @@ def load_robot(
     """
     entry = resolve_robot(source)
     urdf_links = read_urdf_inertials(entry.urdf)
-    try:
-        model = pin.buildModelFromUrdf(str(entry.urdf))
+    try:  # urdfdom prints its own lines on stderr: urpc says it in its one error line
+        with captured_stderr() as parser_output:
+            model = pin.buildModelFromUrdf(str(entry.urdf))
     except Exception as exc:  # Pinocchio raises plain RuntimeError/ValueError on bad XML
-        raise InputError(f"Pinocchio cannot parse this URDF: {exc}", source=entry.urdf) from None
+        said = parser_output.first_line
+        raise InputError(
+            f"Pinocchio cannot parse this URDF: {exc}"
+            + (f" (the URDF parser: {said})" if said else ""),
+            source=entry.urdf,
+        ) from None
     if isinstance(locked_joints, Mapping):
         locked = {str(k): float(v) for k, v in locked_joints.items()}
     else:

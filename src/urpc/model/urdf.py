@@ -145,13 +145,44 @@ def check_mimic_joints(path: Path, locked: Mapping[str, float]) -> None:
         )
 
 
+def robot_display_name(robot: str) -> str:
+    """The name to show for ``robot`` (a URDF path or a robot name): a URDF file's ``<robot
+    name>`` (read from its first element only), else the file stem; a name as given."""
+    import xml.etree.ElementTree as ElementTree
+
+    path = Path(robot)
+    if path.suffix.lower() != ".urdf" or not path.is_file():
+        return path.stem if path.suffix.lower() == ".urdf" else robot
+    try:
+        for _, element in ElementTree.iterparse(path, events=("start",)):
+            return element.get("name") or path.stem
+    except (ElementTree.ParseError, OSError):
+        pass
+    return path.stem
+
+
+#: Largest URDF read [bytes] (the shipped and example-robot-data arms are 5-100 kB).
+MAX_URDF_BYTES = 8 << 20
+
+
 def read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
     """Per-link inertias from the URDF (yourdfpy), in link frames, with joint-type checks."""
     import xml.etree.ElementTree as ElementTree
 
     import yourdfpy
 
-    # Check well-formedness first: the C++ URDF parser prints its own lines on stderr otherwise.
+    # A hostile size first (a URDF is text of a few hundred kB at most), then well-formedness:
+    # the C++ URDF parser prints its own lines on stderr otherwise.
+    try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise InputError(f"cannot read the file ({exc.strerror})", source=path) from None
+    if size > MAX_URDF_BYTES:
+        raise InputError(
+            f"the file is too large for a URDF ({size / 2**20:.3g} MiB; at most "
+            f"{MAX_URDF_BYTES // 2**20} MiB): meshes belong in their own files",
+            source=path,
+        )
     try:
         root = ElementTree.parse(path).getroot()
     except ElementTree.ParseError as exc:
@@ -165,6 +196,16 @@ def read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
         )
     # Before yourdfpy and Pinocchio: a link with two parents crashes the C++ parser.
     check_tree(root, path)
+    for joint in root.findall("joint"):
+        kind = joint.get("type")
+        if kind in ("revolute", "prismatic") and joint.find("limit") is None:
+            raise InputError(
+                f"joint '{joint.get('name')}' is {kind} but has no <limit> (the URDF format "
+                'requires <limit lower=".." upper=".." effort=".." velocity=".."/>); add it, or '
+                "make the joint continuous",
+                source=path,
+                field=f"joint.{joint.get('name')}.limit",
+            )
     try:
         urdf = yourdfpy.URDF.load(
             str(path), load_meshes=False, build_scene_graph=False, load_collision_meshes=False

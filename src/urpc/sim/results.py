@@ -11,7 +11,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import shutil
 import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
@@ -291,38 +290,69 @@ class SimulationResult:
 
 
 def check_writable(directory: str | Path) -> Path:
-    """Check, without creating anything, that ``directory`` can be written (it exists as a
-    writable folder, or its nearest existing ancestor is one); returns it as an absolute path.
-    Every command that writes files calls it before any work starts.
+    """Check that ``directory`` can be written, leaving nothing behind: an existing folder
+    receives (and loses at once) a probe file, a missing one is created with its missing parents
+    and removed again. Trying is the only test that holds everywhere (``os.access`` says yes to
+    root in ``/proc`` or on a read-only mount). Returns the folder as an absolute path. Every
+    command that writes files calls it before any work starts.
 
     Raises:
-        InputError: naming the folder that is in the way.
+        InputError: naming the folder that is in the way and why.
     """
     directory = Path(directory).expanduser().absolute()
     if directory.exists() and not directory.is_dir():
         raise InputError(
             "exists and is not a folder; give a folder for the outputs", source=directory
         )
-    target = directory if directory.exists() else directory.parent
+    target = directory
     while not target.exists():
         target = target.parent
-    if not target.is_dir() or not os.access(target, os.W_OK | os.X_OK):
+    if not target.is_dir():
         raise InputError(
             f"cannot create the output folder: '{target}' is not a writable folder; choose "
             "another --out",
             source=directory,
         )
+    try:
+        if directory.exists():
+            handle, probe = tempfile.mkstemp(prefix=".urpc-probe-", dir=directory)
+            os.close(handle)
+            os.unlink(probe)
+        else:
+            created: list[Path] = []
+            try:
+                _make_folders(directory, created)
+            finally:
+                for folder in reversed(created):
+                    folder.rmdir()
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise InputError(
+            f"cannot write the output folder ({reason}); choose another --out", source=directory
+        ) from None
     return directory
+
+
+#: Marker of a file being written by :func:`write_files`: ``NAME.partial.EXT`` (the extension
+#: kept for writers that infer the format from it) takes the name ``NAME.EXT`` when complete.
+PARTIAL_SUFFIX = ".partial"
+
+
+def partial_path(final: Path) -> Path:
+    """Where :func:`write_files` writes ``final`` until it is complete."""
+    return final.with_name(f"{final.stem}{PARTIAL_SUFFIX}{final.suffix}")
 
 
 def write_files(directory: str | Path, writers: Mapping[str, Callable[[Path], None]]) -> Path:
     """Write a set of files into ``directory`` so that a failure leaves no partial file behind.
 
     ``writers`` maps a relative file name (``"summary.json"``, ``"runs/s1/result.npz"``) to a
-    function that writes that file at the path it is given. Every file is first written into a
-    staging directory; only when all are written do they move into place: a new ``directory``
-    (its parents are created) is the staging directory renamed, an existing one receives each file
-    by ``os.replace`` (other files in it are kept).
+    function that writes that file at the path it is given. Every file is first written under its
+    partial name (:func:`partial_path`, ``summary.partial.json``) in its final folder; only when all are written do they
+    take their final names (``os.replace``; other files in ``directory`` are kept). An exception
+    removes the partial files and the folders this call created; a process killed while writing
+    leaves visible ``*.partial.*`` files inside ``directory`` (replaced by the next write), never a
+    hidden scratch folder beside it. Folders and files follow the umask.
 
     Returns:
         The directory.
@@ -338,30 +368,40 @@ def write_files(directory: str | Path, writers: Mapping[str, Callable[[Path], No
         )
     check_writable(directory)  # a file in the way is an InputError, not NotADirectoryError
     directory = Path(directory)
-    existing = directory.is_dir()
-    if existing:
-        parent = directory
-    else:
-        parent = directory.parent
-        parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", suffix=".tmp", dir=parent))
+    created: list[Path] = []
+    staged: list[tuple[Path, Path]] = []
     try:
+        _make_folders(directory, created)
         for name, write in writers.items():
-            path = staging / name
-            path.parent.mkdir(parents=True, exist_ok=True)
-            write(path)
-        if not existing:
-            os.rename(staging, directory)
-            return directory
-        for name in writers:
             final = directory / name
-            final.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(staging / name, final)
+            _make_folders(final.parent, created)
+            partial = partial_path(final)
+            staged.append((partial, final))
+            write(partial)
+        for partial, final in staged:
+            os.replace(partial, final)
     except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
+        for partial, _ in staged:
+            partial.unlink(missing_ok=True)
+        for folder in reversed(created):
+            try:
+                folder.rmdir()
+            except OSError:
+                pass
         raise
-    shutil.rmtree(staging, ignore_errors=True)
     return directory
+
+
+def _make_folders(folder: Path, created: list[Path]) -> None:
+    """Create ``folder`` and its missing parents (mode 0o777 less the umask), appending each
+    folder created to ``created``, parents first."""
+    missing = []
+    while not folder.exists():
+        missing.append(folder)
+        folder = folder.parent
+    for path in reversed(missing):
+        path.mkdir(exist_ok=True)
+        created.append(path)
 
 
 def _json_float(value: float) -> float | None:

@@ -3,6 +3,7 @@ the inertia the :class:`~urpc.model.robot.Robot` gives its link."""
 
 from __future__ import annotations
 
+import warnings
 import xml.etree.ElementTree as ElementTree
 from types import ModuleType
 from typing import TYPE_CHECKING
@@ -155,6 +156,7 @@ def _mujoco_urdf(robot: Robot) -> str:
         root = ElementTree.parse(robot.urdf_path).getroot()
     except (ElementTree.ParseError, OSError) as exc:
         raise InputError(f"cannot read the URDF ({exc})", source=robot.urdf_path) from None
+    _warn_missing_meshes(root, robot.urdf_path)
     for element in list(root):
         if element.tag == "link":
             for child in list(element):
@@ -178,6 +180,50 @@ def _mujoco_urdf(robot: Robot) -> str:
         boundinertia="0",
     )
     return ElementTree.tostring(root, encoding="unicode")
+
+
+class MissingMeshWarning(UserWarning):
+    """Meshes a URDF names cannot be found (the MuJoCo plant itself does not need them)."""
+
+
+def _warn_missing_meshes(root: ElementTree.Element, urdf_path) -> None:
+    """One warning naming the meshes of the URDF that cannot be found: an unexpanded xacro
+    ``$(find ...)``, a ``package://`` path no folder above the URDF holds, a missing file. The
+    plant does not need them (visuals and collisions are removed, the dynamics come from the
+    ``<inertial>`` elements), but a URDF with unresolved paths is often not the one meant."""
+    from pathlib import Path
+
+    base = Path(urdf_path).resolve().parent
+    missing = []
+    for link in root.iter("link"):
+        for mesh in link.iter("mesh"):
+            name = mesh.get("filename", "")
+            if name and not _mesh_found(name, base):
+                missing.append(f"{link.get('name')}: {name}")
+    if missing:
+        shown = ", ".join(missing[:3]) + (
+            f" and {len(missing) - 3} more" if len(missing) > 3 else ""
+        )
+        warnings.warn(
+            f"{urdf_path}: {len(missing)} mesh file(s) of the URDF cannot be found ({shown}); "
+            "the MuJoCo plant does not use meshes (its dynamics come from each <inertial>), but "
+            "an unexpanded $(find ...) or package:// path often means the URDF is not the one "
+            "meant (run xacro first)",
+            MissingMeshWarning,
+            stacklevel=3,
+        )
+
+
+def _mesh_found(name: str, base) -> bool:
+    from pathlib import Path
+
+    if "$(" in name:
+        return False
+    if name.startswith("package://"):
+        relative = name.removeprefix("package://")
+        return any((folder / relative).is_file() for folder in (base, *base.parents))
+    path = Path(name.removeprefix("file://"))
+    return (path if path.is_absolute() else base / path).is_file()
 
 
 def _fix_joint(joint: ElementTree.Element, value: float) -> None:

@@ -24,20 +24,33 @@ robot, the box and the controller once per scenario and only swaps the true plan
 
 A run that diverges is recorded (``status = "diverged"``, not met), not raised.
 
+With an output folder, each run is recorded as it finishes in ``runs.sqlite`` (``store``:
+append-only, committed per run, the folder locked while the campaign runs); the outputs are built
+from the records, and an interrupted or killed campaign resumes (``resume=True``, ``urpc campaign
+--resume``) to results bit-identical to an uninterrupted one. Ctrl-C terminates the workers at
+once (:mod:`urpc.studies.pool`) and raises :class:`CampaignInterrupted`.
+
 Modules: ``draws`` (what each run draws), ``worker`` (one run on a worker), ``run``
 (:func:`run_campaign`: local pool or Dask), ``progress``, ``result`` (:class:`CampaignResult`),
-``figures`` and ``outputs`` (the files, written atomically).
+``figures`` and ``outputs`` (the files, written atomically), ``store`` (the records).
 """
 
-from .draws import MAX_DRAWS, PSEUDO_INERTIA_TOLERANCE, RunSpec, draw_runs, physically_consistent
+from ...model.parameter_point import MAX_DRAWS, PSEUDO_INERTIA_TOLERANCE, physically_consistent
+from .draws import RunSpec, VertexRunsWarning, draw_runs
 from .figures import plot_campaign
 from .outputs import HISTOGRAM_NAME, RUNS_NAME, SUMMARY_NAME, check_writable
 from .result import METRIC_COLUMNS, CampaignResult
-from .run import run_campaign
+from .run import CampaignInterrupted, campaign_settings, run_campaign
+from .store import LOCK_NAME, STORE_NAME, CampaignStore
 from .worker import RunOutcome, RunTask, run_one
 
 __all__ = [
     "HISTOGRAM_NAME",
+    "LOCK_NAME",
+    "STORE_NAME",
+    "CampaignInterrupted",
+    "CampaignStore",
+    "campaign_settings",
     "MAX_DRAWS",
     "METRIC_COLUMNS",
     "PSEUDO_INERTIA_TOLERANCE",
@@ -47,6 +60,7 @@ __all__ = [
     "RunOutcome",
     "RunSpec",
     "RunTask",
+    "VertexRunsWarning",
     "check_writable",
     "draw_runs",
     "physically_consistent",

@@ -5,22 +5,26 @@ alone (rules in :mod:`urpc.studies.campaign`)."""
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
-import pinocchio as pin
 
 from ...errors import InputError
-from ...model.parameter_box import link_points
+from ...model.parameter_point import (
+    MAX_DRAWS,
+    physically_consistent,
+    sample_rigid_point,
+)
 from ...model.uncertainty import ParameterBox
+from ...wording import count
 from ..scenario import ScenarioSetup
 
-#: Uniform draws tried per run before the box is declared (almost) nowhere physical.
-MAX_DRAWS = 1000
-#: Relative tolerance on the smallest pseudo-inertia eigenvalue (vertices sit on the boundary).
-PSEUDO_INERTIA_TOLERANCE = 1e-12
+
+class VertexRunsWarning(UserWarning):
+    """More vertex runs were asked for than the campaign has runs, or the box vertices."""
 
 
 @dataclass(frozen=True)
@@ -46,24 +50,6 @@ class RunSpec:
     q0: tuple[float, ...]
     qd0: tuple[float, ...]
     rejected: int = 0
-
-
-def physically_consistent(box: ParameterBox, point: Mapping[str, Any]) -> bool:
-    """Whether every link point of ``point`` is a realizable rigid body: its pseudo-inertia
-    matrix (Pinocchio's ``PseudoInertia``) is positive semi-definite, and a massless point
-    carries no first or second moment either."""
-    for name, values in link_points(point).items():
-        parameters = box.link_box(name).standard_parameters(np.asarray(values, dtype=float))
-        if not np.all(np.isfinite(parameters)):
-            return False
-        pseudo = pin.PseudoInertia.FromDynamicParameters(parameters).toMatrix()
-        eigenvalues = np.linalg.eigvalsh(pseudo)
-        scale = max(1.0, float(np.abs(eigenvalues).max()))
-        if eigenvalues[0] < -PSEUDO_INERTIA_TOLERANCE * scale:
-            return False
-        if parameters[0] <= 0 and np.abs(pseudo).max() > PSEUDO_INERTIA_TOLERANCE * scale:
-            return False
-    return True
 
 
 def draw_runs(
@@ -100,7 +86,16 @@ def draw_runs(
     run_sequence, selection_sequence = np.random.SeedSequence(seed).spawn(2)
     if vertex_runs is None:
         vertex_runs = total if total <= runs else runs // 2
-    vertex_runs = min(checked_count("vertex_runs", vertex_runs, 0), runs, total)
+    requested = checked_count("vertex_runs", vertex_runs, 0)
+    vertex_runs = min(requested, runs, total)
+    if requested > vertex_runs:
+        limit = f"the {count(runs, 'run')}" if requested > runs else f"the box's {total} vertices"
+        warnings.warn(
+            f"vertex_runs {requested} exceeds {limit}: runs only {vertex_runs} vertex "
+            f"{'run' if vertex_runs == 1 else 'runs'}",
+            VertexRunsWarning,
+            stacklevel=2,
+        )
     if vertex_runs == total:
         candidates = iter(range(total))
     else:
@@ -158,17 +153,7 @@ def _random_vertices(n_uncertain: int, rng: np.random.Generator):
 def _consistent_draw(
     box: ParameterBox, rng: np.random.Generator
 ) -> tuple[dict[str, np.ndarray], int]:
-    for rejected in range(MAX_DRAWS):
-        point = box.sample(rng)
-        if physically_consistent(box, point):
-            return point, rejected
-    raise InputError(
-        f"no physically consistent point in {MAX_DRAWS} uniform draws from the box (pseudo-inertia "
-        "not positive semi-definite): tighten the inertia intervals so that the triangle "
-        "inequality holds",
-        source=box.source,
-        field="links",
-    )
+    return sample_rigid_point(box, rng, MAX_DRAWS)
 
 
 def checked_count(name: str, value: Any, minimum: int) -> int:

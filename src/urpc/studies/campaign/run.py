@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import concurrent.futures
 import json
-import multiprocessing
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -12,14 +11,32 @@ from typing import Any
 
 import numpy as np
 
+from ... import __version__
 from ...errors import InputError
 from ...model.parameter_box import JOINTS
+from ...sim.results import check_writable
 from ..certification import certificate_fields
+from ..pool import submit_all, worker_pool
 from ..scenario import Scenario, build, build_controller, load_scenario
 from .draws import checked_count, draw_runs
 from .progress import CampaignProgress
 from .result import CampaignResult
+from .store import LOCK_NAME, STORE_NAME, CampaignStore
 from .worker import RunOutcome, RunTask, run_one
+
+
+class CampaignInterrupted(KeyboardInterrupt):
+    """A campaign stopped by Ctrl-C (SIGINT): the workers are stopped, the finished runs are kept
+    in the records of ``directory`` (``None`` without ``out``) and ``--resume`` continues it.
+
+    Attributes:
+        done: Runs recorded, of ``total``.
+        directory: The campaign folder, or ``None``.
+    """
+
+    def __init__(self, done: int, total: int, directory: Path | None):
+        super().__init__(f"campaign interrupted: {done} of {total} runs done")
+        self.done, self.total, self.directory = done, total, directory
 
 
 def run_campaign(
@@ -33,9 +50,17 @@ def run_campaign(
     ic_spread: float = 2.0,
     vertex_runs: int | None = None,
     connect_timeout: float = 10.0,
+    out: str | Path | None = None,
+    resume: bool = False,
 ) -> CampaignResult:
     """Run ``runs`` closed-loop simulations of ``scenario`` with drawn true parameters,
     disturbance seeds and initial states (rules in the module docstring), in parallel.
+
+    With ``out``, every run is recorded in ``out/runs.sqlite`` as it finishes
+    (:mod:`urpc.studies.campaign.store`), the folder is locked for the campaign, and the outputs
+    (``runs.csv``, ``summary.json``, ``histogram.png``) are built from the records at the end;
+    ``resume=True`` continues the campaign recorded there (same settings), running only the
+    runs not yet recorded: the result is bit-identical to an uninterrupted campaign.
 
     Args:
         scenario: A :class:`Scenario`, a scenario file or a shipped name (``rr_planar/s3_ic1``).
@@ -48,39 +73,131 @@ def run_campaign(
         ic_spread: Half-width of the initial-offset box [epsilon].
         vertex_runs: Number of vertex runs (default: see :func:`draw_runs`).
         connect_timeout: Time allowed to reach the Dask scheduler [s].
+        out: Campaign folder for the records and the outputs, or ``None`` (nothing written).
+        resume: Continue the campaign recorded in ``out``.
 
     Raises:
-        InputError: a bad argument or scenario, an unreachable scheduler.
+        InputError: a bad argument or scenario, an unreachable scheduler; with ``out``: a folder
+            in use by another campaign, records without ``resume``, records of other settings.
+        CampaignInterrupted: Ctrl-C; the finished runs are kept in ``out``.
     """
     start = time.perf_counter()
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     workers = checked_count("workers", workers, 1)
-    setup = build(scenario)
-    # Bad controller options fail here, before any worker starts; one certificate for all runs.
-    guarantee = certificate_fields(setup, build_controller(setup))
-    specs, draws = draw_runs(setup, runs, seed, ic_spread=ic_spread, vertex_runs=vertex_runs)
+    runs = checked_count("runs", runs, 1)
+    seed = checked_count("seed", seed, 0)
+    if isinstance(ic_spread, bool) or not isinstance(ic_spread, int | float | np.floating):
+        raise InputError(f"{ic_spread!r} must be a finite number >= 0 [epsilon]", field="ic_spread")
+    store = None
+    settings = campaign_settings(scenario, runs, seed, ic_spread, vertex_runs)
+    if out is not None:
+        out = check_writable(out)
+        if (out / STORE_NAME).exists() or (out / LOCK_NAME).exists():
+            store = CampaignStore.open(out, settings, resume=resume)  # refuse at once
+    try:
+        setup = build(scenario)
+        # Bad controller options fail here, before any worker starts; one certificate for all.
+        guarantee = certificate_fields(setup, build_controller(setup))
+        specs, draws = draw_runs(setup, runs, seed, ic_spread=ic_spread, vertex_runs=vertex_runs)
+        if out is not None and store is None:
+            store = CampaignStore.open(out, settings, resume=resume)
+        outcomes = _execute(scenario, specs, store, workers, scheduler, connect_timeout, progress)
+        result = CampaignResult(
+            scenario=scenario,
+            outcomes=outcomes,
+            seed=int(seed),
+            draws=draws,
+            parameter_names=_parameter_names(setup),
+            joint_names=setup.robot.joint_names,
+            workers=None if scheduler is not None else workers,
+            scheduler=scheduler,
+            wall_time=time.perf_counter() - start,
+            certificate=guarantee,
+        )
+        if store is not None:
+            result.save(out)  # still under the folder's lock
+            store.mark_finished()
+    except BaseException:
+        if store is not None:
+            store.discard()  # nothing recorded: nothing left behind
+        raise
+    if store is not None:
+        store.close()
+    return result
+
+
+def campaign_settings(
+    scenario: Scenario, runs: int, seed: int, ic_spread: float, vertex_runs: int | None
+) -> dict[str, Any]:
+    """What determines a campaign's runs (a resumed campaign must have the same)."""
+    return {
+        "urpc": __version__,
+        "scenario": json.loads(json.dumps(scenario.to_dict(), sort_keys=True)),
+        "scenario_file": None if scenario.source is None else str(scenario.source),
+        "runs": runs,
+        "seed": seed,
+        "ic_spread": float(ic_spread),
+        "vertex_runs": vertex_runs,
+    }
+
+
+def _execute(scenario, specs, store, workers, scheduler, connect_timeout, progress):
+    """Run what is not recorded yet; every outcome is recorded as it arrives. Returns all the
+    outcomes in run order (those of the records when there is a store: what is reported is
+    what is recorded)."""
+    done = {} if store is None else store.outcomes()
+    for index, outcome in done.items():
+        if index >= len(specs) or outcome.spec != specs[index]:
+            raise InputError(
+                f"the recorded run {index} does not match its draw (recorded by another version "
+                f"of urpc?); delete {STORE_NAME} to start over, or give another --out",
+                source=store.directory,
+            )
     document = json.dumps(scenario.to_dict(), sort_keys=True)
     source = None if scenario.source is None else str(scenario.source)
-    tasks = [RunTask(document, source, spec) for spec in specs]
-    report = CampaignProgress(progress, len(tasks))
+    tasks = [RunTask(document, source, spec) for spec in specs if spec.index not in done]
+    collected = dict(done)
+    report = CampaignProgress(progress, len(specs))
+
+    def record(outcome: RunOutcome) -> None:
+        if store is not None:
+            store.add(outcome)
+        collected[outcome.spec.index] = outcome
+        report.advance()
+
     try:
-        if scheduler is not None:
-            outcomes = _run_dask(tasks, scheduler, connect_timeout, report)
+        if not tasks:
+            pass
+        elif scheduler is not None:
+            _run_dask(tasks, scheduler, connect_timeout, report, record, len(done))
         elif workers == 1:
-            report.start()
-            outcomes = []
+            _start(report, len(done))
             for task in tasks:
-                outcomes.append(run_one(task))
-                report.advance()
+                record(run_one(task))
         else:
-            outcomes = _run_pool(tasks, workers, report)
+            _run_pool(tasks, workers, report, record, len(done))
+    except KeyboardInterrupt:
+        report.close(failed=True)
+        directory = None if store is None else store.directory
+        raise CampaignInterrupted(len(collected), len(specs), directory) from None
     except BaseException:
         report.close(failed=True)  # no bar left above the error line
         raise
     finally:
         report.close()
-    outcomes.sort(key=lambda o: o.spec.index)
+    if store is not None:
+        collected = store.outcomes()
+    return tuple(collected[index] for index in range(len(specs)))
+
+
+def _start(report: CampaignProgress, done: int) -> None:
+    report.start()
+    if done:
+        report.advance(done)
+
+
+def _parameter_names(setup) -> tuple[tuple[str, str, int], ...]:
     names = tuple(
         (b.link, b.fields[k], int(k)) for b in setup.box.links for k in np.flatnonzero(b.uncertain)
     )
@@ -91,40 +208,22 @@ def run_campaign(
             (JOINTS, joints.name(r, c), int(r * joints.dof + c))
             for r, c in zip(rows, columns, strict=True)
         )
-    return CampaignResult(
-        scenario=scenario,
-        outcomes=tuple(outcomes),
-        seed=int(seed),
-        draws=draws,
-        parameter_names=names,
-        joint_names=setup.robot.joint_names,
-        workers=None if scheduler is not None else workers,
-        scheduler=scheduler,
-        wall_time=time.perf_counter() - start,
-        certificate=guarantee,
-    )
+    return names
 
 
-def _run_pool(tasks: Sequence[RunTask], workers: int, report: CampaignProgress) -> list[RunOutcome]:
-    # "spawn": fresh interpreters on every platform (no fork of a threaded parent).
-    context = multiprocessing.get_context("spawn")
-    outcomes = []
-    with concurrent.futures.ProcessPoolExecutor(workers, mp_context=context) as pool:
-        futures = [pool.submit(run_one, task) for task in tasks]
-        report.start()
-        try:
-            for future in concurrent.futures.as_completed(futures):
-                outcomes.append(future.result())
-                report.advance()
-        except BaseException:
-            pool.shutdown(wait=False, cancel_futures=True)
-            raise
-    return outcomes
+def _run_pool(tasks: Sequence[RunTask], workers: int, report, record, done: int) -> None:
+    # "spawn": fresh interpreters on every platform (no fork of a threaded parent). The pool's
+    # workers ignore Ctrl-C and are terminated at once when this parent is interrupted.
+    with worker_pool(workers, start_method="spawn") as pool:
+        futures = submit_all(pool, run_one, tasks)
+        _start(report, done)
+        for future in concurrent.futures.as_completed(futures):
+            record(future.result())
 
 
 def _run_dask(
-    tasks: Sequence[RunTask], address: str, timeout: float, report: CampaignProgress
-) -> list[RunOutcome]:
+    tasks: Sequence[RunTask], address: str, timeout: float, report: CampaignProgress, record, done
+) -> None:
     try:
         from dask.distributed import Client, as_completed
         from distributed.comm import parse_address
@@ -149,18 +248,15 @@ def _run_dask(
         raise InputError(
             f"cannot reach the Dask scheduler at '{address}' ({exc}); {hint}", field="scheduler"
         ) from None
-    outcomes = []
     try:
         futures = client.map(run_one, tasks, pure=False)
-        report.start()
+        _start(report, done)
         try:
             with client.as_current():  # as_completed looks up the current client
                 for future in as_completed(futures):
-                    outcomes.append(future.result())
-                    report.advance()
+                    record(future.result())
         except BaseException:
             client.cancel(futures)
             raise
     finally:
         client.close()
-    return outcomes

@@ -5,16 +5,13 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import shutil
-import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from ...errors import InputError
-from ...sim.results import NPZ_NAME, SUMMARY_NAME, write_files
+from ...sim.results import check_writable, write_files
 from .figures import figure_writers
 from .report import document_of, jsonable, results_markdown
 from .runs import PAPER_CONTROLLERS, PAPER_RUNS, RunReporter, run_all
@@ -54,42 +51,28 @@ def reproduce_paper(
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise InputError(f"{workers!r} must be an integer >= 1", field="workers")
     out_dir = Path(out_dir)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise InputError("exists and is not a directory", source=out_dir, field="out")
+    check_writable(out_dir)  # before any work: a file in the way, a read-only folder
     start = time.perf_counter()
     jobs = [(n, ic, c) for n, ic in PAPER_RUNS for c in PAPER_CONTROLLERS]
     # The 10 kHz runs take longest: start them first so that two workers finish together.
     order = sorted(jobs, key=lambda job: (job[0] != 2, job[0] != 3))
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    scratch = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.runs.", dir=out_dir.parent))
-    try:
-        runs = run_all(order, duration, scratch, workers, RunReporter(progress, len(jobs)))
-        runs = {job: runs[job] for job in jobs}  # report order
-        document = document_of(runs, duration, workers)
-        writers = figure_writers(runs)
-        for run in runs.values():
-            folder = scratch / run["folder"]
-            for name in (NPZ_NAME, SUMMARY_NAME):
-                writers[f"runs/{run['folder']}/{name}"] = _mover(folder / name)
-        document["wall_time"] = time.perf_counter() - start
-        writers["results.md"] = _text_writer(results_markdown(document))
-        writers["results.json"] = _text_writer(json.dumps(jsonable(document), indent=2) + "\n")
-        write_files(out_dir, writers)
-        files = sorted(writers)
-    finally:
-        shutil.rmtree(scratch, ignore_errors=True)
+    runs = run_all(order, duration, workers, RunReporter(progress, len(jobs)))
+    runs = {job: runs[job] for job in jobs}  # report order
+    document = document_of(runs, duration, workers)
+    writers = figure_writers(runs)
+    for run in runs.values():
+        for name, write in run["result"].writers(csv=False).items():
+            writers[f"runs/{run['folder']}/{name}"] = write
+    document["wall_time"] = time.perf_counter() - start
+    writers["results.md"] = _text_writer(results_markdown(document))
+    writers["results.json"] = _text_writer(json.dumps(jsonable(document), indent=2) + "\n")
+    write_files(out_dir, writers)
+    files = sorted(writers)
     return {**document, "out_dir": str(out_dir), "files": files}
 
 
 def _text_writer(text: str) -> Callable[[Path], None]:
     def write(path: Path) -> None:
         path.write_text(text)
-
-    return write
-
-
-def _mover(source: Path) -> Callable[[Path], None]:
-    def write(path: Path) -> None:
-        os.replace(source, path)
 
     return write

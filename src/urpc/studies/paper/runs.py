@@ -3,12 +3,12 @@ process, and their progress."""
 
 from __future__ import annotations
 
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import asdict
-from pathlib import Path
 from typing import Any
 
 from ...sim.progress import Progress, report_labelled
+from ..pool import submit_all, worker_pool
 
 #: The paper's scenarios (Table II number, initial condition) in report order.
 PAPER_RUNS = tuple((number, ic) for number in (1, 2, 3) for ic in (1, 2))
@@ -23,8 +23,9 @@ def scenario_name(number: int, ic: int) -> str:
     return f"{_ROBOT}/s{number}_ic{ic}"
 
 
-def run_one(number: int, ic: int, controller: str, duration: float | None, scratch: str) -> dict:
-    """One run (in a worker process): simulate, save npz + summary, return what the report needs."""
+def run_one(number: int, ic: int, controller: str, duration: float | None) -> dict:
+    """One run (in a worker process): simulate, return the result and what the report needs (the
+    parent writes every file at once: a killed reproduction leaves no scratch folder)."""
     from ..scenario import build, build_controller, load_scenario, simulate_setup
 
     scenario = load_scenario(scenario_name(number, ic))
@@ -34,7 +35,6 @@ def run_one(number: int, ic: int, controller: str, duration: float | None, scrat
     law = build_controller(setup, controller)
     result = simulate_setup(setup, law)
     folder = f"s{number}_ic{ic}-{controller}"
-    result.save(Path(scratch) / folder, csv=False)
     run = {"result": result, "folder": folder}
     if controller == "r-alpha":
         betas = law.betas
@@ -50,16 +50,23 @@ def run_one(number: int, ic: int, controller: str, duration: float | None, scrat
     return run
 
 
-def run_all(jobs, duration, scratch: Path, workers: int, reporter) -> dict:
+def _run_job(arguments: tuple) -> dict:
+    return run_one(*arguments)
+
+
+def run_all(jobs, duration, workers: int, reporter) -> dict:
     runs = {}
     if workers == 1:
         with reporter:
             for job in jobs:
-                runs[job] = run_one(*job, duration, str(scratch))
+                runs[job] = run_one(*job, duration)
                 reporter.done(_label(job))
         return runs
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(run_one, *job, duration, str(scratch)): job for job in jobs}
+    # Workers ignore Ctrl-C and are terminated at once when this parent is interrupted.
+    with worker_pool(workers) as pool:
+        jobs = list(jobs)
+        submitted = submit_all(pool, _run_job, [(*job, duration) for job in jobs])
+        futures = dict(zip(submitted, jobs, strict=True))
         reporter.open()
         try:
             for future in as_completed(futures):
@@ -68,8 +75,6 @@ def run_all(jobs, duration, scratch: Path, workers: int, reporter) -> dict:
                 reporter.done(_label(job))
         except BaseException:
             reporter.close(failed=True)  # no bar left above the error line
-            for future in futures:
-                future.cancel()
             raise
         finally:
             reporter.close()

@@ -16,8 +16,9 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError
-from ...model.inertia import inertia_problem
 from ...model.parameter_box import joint_values, link_points
+from ...model.parameter_point import box_excursions as parameter_excursions
+from ...model.parameter_point import sample_rigid_point
 from ...model.robot import Robot, load_robot
 from ...model.uncertainty import UNITS, ParameterBox, load_parameter_point, load_uncertainty
 from ...trajectories import (
@@ -65,7 +66,7 @@ class ScenarioSetup:
     def outside_box(self) -> dict[str, float]:
         """``link.field`` -> distance [SI] outside the box of each true parameter that is not in
         it (empty: the true plant is one of the plants the guarantee covers)."""
-        return box_excursions(self.box, self.true_point)
+        return parameter_excursions(self.box, self.true_point, self.robot)
 
     @property
     def inside_box(self) -> bool:
@@ -73,18 +74,10 @@ class ScenarioSetup:
 
 
 def box_excursions(box: ParameterBox, point: dict[str, np.ndarray]) -> dict[str, float]:
-    """``link.field`` -> distance [SI] outside ``box`` of the coordinates of ``point`` that are
-    not in it (rounding of 1e-12 relative tolerated)."""
-    excursions = {}
-    for box_link in box.links:
-        if box_link.link not in point:
-            continue
-        values = np.asarray(point[box_link.link], dtype=float)
-        tolerance = 1e-12 * np.maximum(1.0, np.abs(values))
-        distance = np.maximum(box_link.lower - values, values - box_link.upper)
-        for k in np.flatnonzero(distance > tolerance):
-            excursions[f"{box_link.link}.{box_link.fields[k]}"] = float(distance[k])
-    return excursions
+    """``link.field`` or ``joint.field`` -> distance [SI] outside ``box`` of the coordinates of
+    ``point`` that are not in it, links, payloads and joint drives alike
+    (:func:`urpc.model.parameter_point.box_excursions`)."""
+    return parameter_excursions(box, point)
 
 
 def build(scenario: Scenario) -> ScenarioSetup:
@@ -158,9 +151,11 @@ def _true_point(
     if true.kind == "nominal":
         return {}, "true parameters = nominal parameters (no model error)"
     seed = scenario.seed if true.seed is None else true.seed
-    point = sample_true_parameters(box, seed, source)
+    point, rejected = _sampled(box, seed, source)
+    rejections = f"; {rejected} draws that were no rigid body rejected" if rejected else ""
     return point, (
-        f"true parameters drawn uniformly from the box (seed {seed}): " + describe_point(box, point)
+        f"true parameters drawn uniformly from the rigid bodies of the box (seed {seed}"
+        f"{rejections}): " + describe_point(box, point)
     )
 
 
@@ -184,26 +179,22 @@ def describe_point(box: ParameterBox, point: Mapping[str, np.ndarray]) -> str:
 def sample_true_parameters(
     box: ParameterBox, seed: int, source: str | None = None, tries: int = 1000
 ) -> dict[str, np.ndarray]:
-    """A seeded uniform draw from ``box`` whose every link inertia is physically consistent.
+    """A seeded uniform draw from the rigid bodies of ``box``
+    (:func:`urpc.model.parameter_point.sample_rigid_point`, pseudo-inertia test).
 
     Raises:
         InputError: no consistent point found in ``tries`` draws.
     """
-    rng = np.random.default_rng(seed)
-    for _ in range(tries):
-        point = box.sample(rng)
-        if all(
-            inertia_problem(np.asarray(box.link_box(name).inertia(values).inertia)) is None
-            and values[0] > 0
-            for name, values in link_points(point).items()
-        ):
-            return point
-    raise InputError(
-        f"no physically consistent point found in {tries} draws from the box; give a "
-        "true_parameters file",
-        source=source,
-        field="true_parameters",
-    )
+    return _sampled(box, seed, source, tries)[0]
+
+
+def _sampled(
+    box: ParameterBox, seed: int, source: str | None, tries: int = 1000
+) -> tuple[dict[str, np.ndarray], int]:
+    try:
+        return sample_rigid_point(box, np.random.default_rng(seed), tries)
+    except InputError as exc:
+        raise InputError(exc.detail, source=source, field="true_parameters") from None
 
 
 def _trajectory(spec: TrajectorySpec, robot: Robot, source: str | None) -> Trajectory:
