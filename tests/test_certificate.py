@@ -33,7 +33,7 @@ def test_the_floor_bounds_every_vertex_plant_once_the_gains_saturate(rr, rr_box,
     for vertex in (0, 3, 5, 7):
         result = urpc.simulate(
             rr_box.plant(rr, rr_box.vertex(vertex)), controller, PaperTrajectory(),
-            duration=DURATION, q0=np.zeros(2), sample_period=period, disturbance_bound=10.0,
+            duration=DURATION, q0=np.zeros(2), disturbance_bound=10.0,
             seed=vertex, controller_state0=saturated,
         )  # fmt: skip
         assert _final_error(result) <= certificate.epsilon_floor, (vertex, certificate.summary())
@@ -46,7 +46,7 @@ def test_a_certified_1_khz_run_meets_epsilon_on_the_corners_of_table_1(rr, rr_bo
     for vertex in (0, 7):  # the light and the heavy corner
         result = urpc.simulate(
             rr_box.plant(rr, rr_box.vertex(vertex)), controller, PaperTrajectory(),
-            duration=DURATION, q0=np.zeros(2), sample_period=1e-3, disturbance_bound=10.0,
+            duration=DURATION, q0=np.zeros(2), disturbance_bound=10.0,
             seed=vertex,
         )  # fmt: skip
         assert result.metrics["met"] and _final_error(result) <= 1e-2
@@ -114,7 +114,7 @@ def test_the_floor_bounds_sampled_ur5_plants_once_the_gains_saturate(ur5):
     for k, point in enumerate(points):
         result = urpc.simulate(
             box.plant(ur5, point), controller, trajectory, duration=2.0,
-            q0=trajectory.reference(0.0).q, sample_period=period, disturbance_bound=2.0,
+            q0=trajectory.reference(0.0).q, disturbance_bound=2.0,
             seed=k, controller_state0=saturated,
         )  # fmt: skip
         assert _final_error(result, 1.0) <= certificate.epsilon_floor, (k, certificate.summary())
@@ -141,6 +141,6 @@ def test_a_one_joint_robot_is_certified_and_runs(tmp_path):
     assert certificate.certified, certificate.summary()
     result = urpc.simulate(
         box.plant(robot, box.vertex(1)), controller, trajectory, duration=2.0,
-        q0=trajectory.reference(0.0).q, sample_period=1e-3, disturbance_bound=1.0,
+        q0=trajectory.reference(0.0).q, disturbance_bound=1.0,
     )  # fmt: skip
     assert result.metrics["met"]

@@ -99,8 +99,11 @@ def test_parallel_runs_equal_serial_runs(reproduction):
         scenario = load_scenario(f"rr_planar/s{number}_ic{ic}").with_overrides(duration=DURATION)
         serial = run_scenario(scenario, controller)
         parallel = SimulationResult.load(out / "runs" / f"s{number}_ic{ic}-{controller}")
-        for name in ("t", "q", "qd", "torque", "disturbance", "phi", "kappa"):
+        for name in ("t", "q", "qd", "torque", "disturbance"):
             np.testing.assert_array_equal(getattr(parallel, name), getattr(serial, name))
+        assert parallel.diagnostics.keys() == serial.diagnostics.keys()
+        for name, series in serial.diagnostics.items():
+            np.testing.assert_array_equal(parallel.diagnostics[name], series)
 
 
 def test_betas_and_design_conditions(reproduction):

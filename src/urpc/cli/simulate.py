@@ -317,7 +317,7 @@ def _print_summary(result, scenario, setup, summary: dict, out: Path | None) -> 
     )
     if result.saturated_samples:
         print(f"saturation   the torque limit clipped {count(result.saturated_samples, 'sample')}")
-    if m["phi"] is not None:
+    if m.get("phi") is not None:
         print(
             f"gains        phi = {m['phi']:.4g} {force} s/{position}, "
             f"kappa = {m['kappa']:.4g} s/{position}"

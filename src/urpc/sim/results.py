@@ -22,13 +22,14 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .metrics import METRIC_NAMES, series_metrics
+from .metrics import series_metrics
 
 #: File names written by :meth:`SimulationResult.save`.
 NPZ_NAME, CSV_NAME, SUMMARY_NAME = "result.npz", "result.csv", "summary.json"
 
-_SERIES = ("t", "q", "qd", "q_desired", "qd_desired", "torque", "disturbance", "phi", "kappa")
-_SERIES_OPTIONAL = ("saturated",)
+_SERIES = ("t", "q", "qd", "q_desired", "qd_desired", "torque", "disturbance", "saturated")
+#: Prefix of a diagnostic series in ``result.npz`` (``diagnostic.phi``).
+_DIAGNOSTIC = "diagnostic."
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,9 +45,10 @@ class SimulationResult:
         torque: Commanded torque ``u`` [N m] (the controller's output, before any torque limit),
             ``(K, n)``; held over the following sample period in a sampled run.
         disturbance: Input disturbance ``d`` [N m] added at the plant input, ``(K, n)``.
-        phi, kappa: The controller's gains [N m s/rad], [s/rad], ``(K,)``, NaN when the
-            controller has none.
         saturated: True where the torque limit clipped the command, ``(K,)``.
+        diagnostics: The controller's named diagnostic series (``Controller.diagnostics``),
+            name -> ``(K,)``, e.g. the interval law's gains ``phi`` [N m s/rad] and ``kappa``
+            [s/rad]; their units are ``info["diagnostic_units"]``. Empty for a law with none.
         controller: Controller name.
         epsilon: Required precision [rad] the run is judged against.
         duration: Simulated time [s].
@@ -68,8 +70,6 @@ class SimulationResult:
     qd_desired: np.ndarray
     torque: np.ndarray
     disturbance: np.ndarray
-    phi: np.ndarray
-    kappa: np.ndarray
     saturated: np.ndarray
     controller: str
     epsilon: float
@@ -80,6 +80,7 @@ class SimulationResult:
     plant: str = ""
     disturbance_bound: float = 0.0
     torque_limit: tuple[float, ...] | None = None
+    diagnostics: Mapping[str, np.ndarray] = field(default_factory=dict)
     step_time_median: float = math.nan
     wall_time: float = math.nan
     info: dict[str, Any] = field(default_factory=dict)
@@ -106,23 +107,21 @@ class SimulationResult:
 
     @cached_property
     def metrics(self) -> dict[str, Any]:
-        """The run's metrics, keys :data:`urpc.sim.metrics.METRIC_NAMES` (see :mod:`urpc.sim.metrics`)."""
+        """The run's metrics, keys :data:`urpc.sim.metrics.METRIC_NAMES` and the final value of
+        each diagnostic series (see :mod:`urpc.sim.metrics`)."""
         return series_metrics(
             self.t,
             self.error_norm,
             self.torque,
             self.epsilon,
-            phi=self.phi,
-            kappa=self.kappa,
+            diagnostics=self.diagnostics,
             step_time_median=self.step_time_median,
             wall_time=self.wall_time,
         )
 
     def summary(self) -> dict[str, Any]:
         """The metrics plus ``epsilon`` and ``controller`` (the content of ``summary.json``)."""
-        metrics = self.metrics
-        summary = {name: metrics[name] for name in METRIC_NAMES}
-        return {**summary, "epsilon": float(self.epsilon), "controller": self.controller}
+        return {**self.metrics, "epsilon": float(self.epsilon), "controller": self.controller}
 
     def __repr__(self) -> str:
         timing = "continuous" if self.sample_period is None else f"T={self.sample_period:g} s"
@@ -166,6 +165,11 @@ class SimulationResult:
                 metadata = json.loads(str(archive["metadata"]))
         except (KeyError, ValueError, OSError) as exc:
             raise InputError(f"not a urpc result file ({exc})", path) from None
+        series["diagnostics"] = {
+            name[len(_DIAGNOSTIC) :]: series.pop(name)
+            for name in list(series)
+            if name.startswith(_DIAGNOSTIC)
+        }
         if metadata.get("torque_limit") is not None:
             metadata["torque_limit"] = tuple(metadata["torque_limit"])
         known = {f.name for f in fields(cls)}
@@ -191,7 +195,9 @@ class SimulationResult:
         }
 
     def _write_npz(self, path: Path) -> None:
-        arrays = {name: np.asarray(getattr(self, name)) for name in _SERIES + _SERIES_OPTIONAL}
+        arrays = {name: np.asarray(getattr(self, name)) for name in _SERIES}
+        for name, series in self.diagnostics.items():
+            arrays[_DIAGNOSTIC + name] = np.asarray(series)
         arrays["error"] = self.error
         arrays["error_norm"] = self.error_norm
         arrays["metadata"] = np.array(json.dumps(self._metadata()))
@@ -217,8 +223,9 @@ class SimulationResult:
         for prefix, data in (("u", self.torque), ("d", self.disturbance)):
             columns += [f"{prefix}_{j}" for j in joints]
             blocks.append(data)
-        columns += ["phi", "kappa"]
-        blocks += [self.phi[:, None], self.kappa[:, None]]
+        for name, series in self.diagnostics.items():
+            columns.append(name)
+            blocks.append(np.asarray(series, dtype=float)[:, None])
         table = np.hstack(blocks)
         with path.open("w") as stream:
             np.savetxt(

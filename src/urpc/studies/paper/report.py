@@ -86,7 +86,7 @@ def results_markdown(document: dict) -> str:
     ]
     for run in document["runs"]:
         cells = [str(run["scenario"]), run["initial_condition"], run["controller"]]
-        cells += [_cell(key, run[key]) for key, _, _ in TABLE_METRICS]
+        cells += [_cell(key, run.get(key)) for key, _, _ in TABLE_METRICS]
         lines.append("| " + " | ".join(cells) + " |")
     betas = document["betas"]
     lines += [
