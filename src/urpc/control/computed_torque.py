@@ -14,9 +14,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..errors import InputError
 from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
+from ..validation import positive_number
 from .base import Controller, Reference, sample_period_of
 
 
@@ -45,8 +45,7 @@ class ComputedTorqueController(Controller):
         sample_period: float | None = None,
     ):
         for label, value in (("natural_frequency", natural_frequency), ("damping", damping)):
-            if not np.isfinite(value) or value <= 0:
-                raise InputError(f"{label}={value} must be a finite number > 0", field=label)
+            positive_number(label, value, "a finite number > 0")
         self.robot = robot
         self.dof = robot.dof
         self.sample_period = sample_period_of(sample_period)

@@ -11,6 +11,7 @@ import numpy as np
 from ...errors import InputError
 from ...model.robot import Robot
 from ...model.uncertainty import ParameterBox
+from ...validation import positive_number
 from ..base import Controller, Reference, sample_period_of
 from .betas import Betas, estimate_betas
 
@@ -99,8 +100,7 @@ class RAlphaController(Controller):
         sample_period: float | None = None,
     ):
         for label, value in (("r", r), ("alpha", alpha), ("eta", eta)):
-            if not np.isfinite(value) or value <= 0:
-                raise InputError(f"{label}={value} must be a finite number > 0", field=label)
+            positive_number(label, value, "a finite number > 0")
         self.betas = betas
         self.dof = int(dof)
         self.r = float(r)
