@@ -19,7 +19,7 @@ from urpc.control.r_alpha import PAPER_BETAS, estimate_betas
 from urpc.model.robot import load_robot
 from urpc.model.uncertainty import load_uncertainty
 from urpc.sim.metrics import METRIC_NAMES
-from urpc.sim.results import SimulationResult, write_files
+from urpc.sim.results import SimulationResult
 from urpc.studies.paper import PAPER_CONTROLLERS, PAPER_RUNS, reproduce_paper
 from urpc.studies.scenario import load_scenario, run_scenario
 
@@ -148,22 +148,3 @@ def test_cli_runs_serially_and_prints_one_json_object(capsys, tmp_path):
     assert len(document["runs"]) == 12 and document["workers"] == 1
     assert document["out_dir"] == str(tmp_path / "p")
     assert json.loads((tmp_path / "p" / "results.json").read_text())["runs"] == document["runs"]
-
-
-def test_write_files_replaces_what_it_writes_and_keeps_the_rest(tmp_path):
-    target = tmp_path / "out"
-    write_files(
-        target, {"a.txt": lambda p: p.write_text("1"), "sub/b.txt": lambda p: p.write_text("2")}
-    )
-    (target / "mine.txt").write_text("keep")
-
-    def broken(path):
-        path.write_text("half")
-        raise OSError("disk full")
-
-    with pytest.raises(OSError):
-        write_files(target, {"a.txt": lambda p: p.write_text("new"), "c.txt": broken})
-    assert (target / "a.txt").read_text() == "1" and not (target / "c.txt").exists()
-    write_files(target, {"sub/b.txt": lambda p: p.write_text("3")})
-    assert (target / "sub" / "b.txt").read_text() == "3" and (target / "mine.txt").is_file()
-    assert sorted(p.name for p in target.iterdir()) == ["a.txt", "mine.txt", "sub"]

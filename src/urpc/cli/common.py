@@ -189,7 +189,7 @@ def show_progress(args) -> bool:
 def output_folder(out: Path | None, default: Path) -> Path:
     """The output folder of a command (``out``, or ``default`` under :data:`RESULTS_ROOT`),
     checked writable before any work starts (:func:`urpc.sim.results.check_writable`)."""
-    from ..sim.results import check_writable
+    from ..atomic import check_writable
 
     return check_writable(default if out is None else out)
 
@@ -218,6 +218,8 @@ def one_line(text: str) -> str:
 
 
 def json_text(payload: dict) -> str:
+    from ..jsonsafe import jsonable  # numpy, so not when the command line is parsed
+
     return json.dumps(jsonable(payload), indent=2, allow_nan=False)
 
 
@@ -229,21 +231,3 @@ def warn_uncertified(guarantee: dict) -> None:
     """One ``warning:`` line on stderr when a run's configuration is not certified."""
     if not guarantee["certified"]:
         print(f"warning: {guarantee['not_certified']}", file=sys.stderr)
-
-
-def jsonable(value):
-    import numpy as np
-
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return jsonable(value.tolist())
-    if isinstance(value, np.generic):
-        return jsonable(value.item())
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, Path):
-        return str(value)
-    return value

@@ -178,7 +178,7 @@ def run_simulate(args) -> int:
     if out is not None:
         import yaml
 
-        from ..sim.results import write_files
+        from ..atomic import write_files
 
         writers = result.writers(csv=True)
         guarantee_text = json_text(guarantee)

@@ -40,6 +40,8 @@ from typing import Any
 
 import numpy as np
 
+from ..jsonsafe import finite_or_none
+
 #: The metric names every run has, in report order (the keys of ``SimulationResult.metrics``
 #: besides the final value of each of the controller's diagnostic series).
 METRIC_NAMES = (
@@ -112,17 +114,12 @@ def series_metrics(
         "torque_peak": float(np.abs(torque).max()),
         "torque_variation": float(differences / span) if span > 0 else 0.0,
         **{name: _final(series) for name, series in (diagnostics or {}).items()},
-        "step_time_median": _optional(step_time_median),
-        "wall_time": _optional(wall_time),
+        "step_time_median": finite_or_none(step_time_median),
+        "wall_time": finite_or_none(wall_time),
     }
 
 
 def _final(series: np.ndarray | None) -> float | None:
     if series is None or len(series) == 0:
         return None
-    value = float(np.asarray(series, dtype=float)[-1])
-    return None if math.isnan(value) else value
-
-
-def _optional(value: float | None) -> float | None:
-    return None if value is None or math.isnan(value) else float(value)
+    return finite_or_none(np.asarray(series, dtype=float)[-1])

@@ -10,9 +10,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import shutil
-import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
 from functools import cached_property
@@ -21,7 +18,9 @@ from typing import Any
 
 import numpy as np
 
+from ..atomic import write_files
 from ..errors import InputError
+from ..jsonsafe import finite_or_none
 from .metrics import series_metrics
 
 #: File names written by :meth:`SimulationResult.save`.
@@ -134,7 +133,7 @@ class SimulationResult:
     def save(self, directory: str | Path, *, csv: bool = True) -> Path:
         """Write ``result.npz`` (every series and the metadata), ``result.csv`` (unless ``csv`` is
         false: a 10 kHz, 10 s run makes a ~7 MB table) and ``summary.json`` into ``directory``
-        (created with its parents if missing), atomically (:func:`write_files`).
+        (created with its parents if missing), atomically (:func:`urpc.atomic.write_files`).
 
         Returns:
             The directory.
@@ -142,7 +141,8 @@ class SimulationResult:
         return write_files(directory, self.writers(csv=csv))
 
     def writers(self, *, csv: bool = True) -> dict[str, Callable[[Path], None]]:
-        """File name -> function writing that file, for :meth:`save` and :func:`write_files`."""
+        """File name -> function writing that file, for :meth:`save` and
+        :func:`urpc.atomic.write_files`."""
         writers = {NPZ_NAME: self._write_npz, CSV_NAME: self._write_csv}
         if not csv:
             del writers[CSV_NAME]
@@ -189,8 +189,8 @@ class SimulationResult:
             "plant": self.plant,
             "disturbance_bound": float(self.disturbance_bound),
             "torque_limit": None if self.torque_limit is None else list(self.torque_limit),
-            "step_time_median": _json_float(self.step_time_median),
-            "wall_time": _json_float(self.wall_time),
+            "step_time_median": finite_or_none(self.step_time_median),
+            "wall_time": finite_or_none(self.wall_time),
             "info": self.info,
         }
 
@@ -295,81 +295,3 @@ class SimulationResult:
                 source=recorded["urdf"],
             )
         return load_robot(recorded["urdf"], recorded.get("locked_joints") or {})
-
-
-def check_writable(directory: str | Path) -> Path:
-    """Check, without creating anything, that ``directory`` can be written (it exists as a
-    writable folder, or its nearest existing ancestor is one); returns it as an absolute path.
-    Every command that writes files calls it before any work starts.
-
-    Raises:
-        InputError: naming the folder that is in the way.
-    """
-    directory = Path(directory).expanduser().absolute()
-    if directory.exists() and not directory.is_dir():
-        raise InputError(
-            "exists and is not a folder; give a folder for the outputs", source=directory
-        )
-    target = directory if directory.exists() else directory.parent
-    while not target.exists():
-        target = target.parent
-    if not target.is_dir() or not os.access(target, os.W_OK | os.X_OK):
-        raise InputError(
-            f"cannot create the output folder: '{target}' is not a writable folder; choose "
-            "another --out",
-            source=directory,
-        )
-    return directory
-
-
-def write_files(directory: str | Path, writers: Mapping[str, Callable[[Path], None]]) -> Path:
-    """Write a set of files into ``directory`` so that a failure leaves no partial file behind.
-
-    ``writers`` maps a relative file name (``"summary.json"``, ``"runs/s1/result.npz"``) to a
-    function that writes that file at the path it is given. Every file is first written into a
-    staging directory; only when all are written do they move into place: a new ``directory``
-    (its parents are created) is the staging directory renamed, an existing one receives each file
-    by ``os.replace`` (other files in it are kept).
-
-    Returns:
-        The directory.
-
-    Raises:
-        InputError: ``directory`` is not a path, is a file, or cannot be created (a file in the
-            way, a read-only folder) (:func:`check_writable`).
-    """
-    if not isinstance(directory, str | Path):
-        raise InputError(
-            f"expected a directory path (str or Path), got {type(directory).__name__}",
-            field="directory",
-        )
-    check_writable(directory)  # a file in the way is an InputError, not NotADirectoryError
-    directory = Path(directory)
-    existing = directory.is_dir()
-    if existing:
-        parent = directory
-    else:
-        parent = directory.parent
-        parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", suffix=".tmp", dir=parent))
-    try:
-        for name, write in writers.items():
-            path = staging / name
-            path.parent.mkdir(parents=True, exist_ok=True)
-            write(path)
-        if not existing:
-            os.rename(staging, directory)
-            return directory
-        for name in writers:
-            final = directory / name
-            final.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(staging / name, final)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
-    shutil.rmtree(staging, ignore_errors=True)
-    return directory
-
-
-def _json_float(value: float) -> float | None:
-    return None if value is None or math.isnan(value) else float(value)

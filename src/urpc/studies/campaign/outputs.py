@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from ...atomic import check_writable, write_files
 from ...errors import InputError
-from ...sim.results import check_writable, write_files
 
 #: File names written by :meth:`CampaignResult.save`.
 RUNS_NAME, SUMMARY_NAME, HISTOGRAM_NAME = "runs.csv", "summary.json", "histogram.png"
