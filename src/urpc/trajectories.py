@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from . import names
 from .errors import InputError
 
 if TYPE_CHECKING:
@@ -230,7 +231,8 @@ class QuinticTrajectory(Trajectory):
 # ============================================================================ generic choice
 #: Largest amplitude generic trajectories use on a joint whose range is wide or unbounded.
 MAX_AMPLITUDE = {"revolute": 0.5, "continuous": 0.5, "prismatic": 0.05}  # [rad], [rad], [m]
-TRAJECTORY_KINDS = ("paper", "sinusoid", "quintic")
+#: Trajectory kinds of a scenario file (:data:`urpc.names.TRAJECTORY_KINDS`).
+TRAJECTORY_KINDS = names.TRAJECTORY_KINDS
 
 
 def home_configuration(robot: Robot) -> np.ndarray:

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..errors import InputError
+from ..names import BOUND_METHODS, CONTROLLERS  # noqa: F401  (re-exported for the commands)
 from ..wording import count  # noqa: F401  (re-exported for the commands)
 
 if TYPE_CHECKING:  # numpy is imported when a command needs it (start-up time of the CLI)
@@ -32,10 +33,6 @@ EXIT_INPUT = 2
 
 #: Root of the default output folders (``urpc-results/<job>``).
 RESULTS_ROOT = Path("urpc-results")
-#: Controllers and bound methods, named here so that the parser lists them without importing the
-#: controllers (``tests/test_cli.py`` checks them against the packages).
-CONTROLLERS = ("interval", "r-alpha", "computed-torque")
-BOUND_METHODS = ("vertex", "hull", "rigorous")
 
 
 class Parser(argparse.ArgumentParser):
