@@ -29,6 +29,7 @@ _LAZY = {
     "make_bound": (".bounds", "make_bound"),
     "Certificate": (".control.certificate", "Certificate"),
     "certify": (".control.certificate", "certify"),
+    "Controller": (".control.base", "Controller"),
     "IntervalPassivityController": (".control.interval", "IntervalPassivityController"),
     "synthesize": (".control.synthesis", "synthesize"),
     "Assembly": (".model.modular", "Assembly"),
@@ -59,6 +60,7 @@ __all__ = [
     "Assembly",
     "BoundMethod",
     "Certificate",
+    "Controller",
     "InputError",
     "ParameterBox",
     "Robot",
@@ -109,6 +111,7 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
     from .bounds import METHODS as BOUND_METHODS
     from .bounds import BoundMethod, default_method, make_bound
+    from .control.base import Controller
     from .control.certificate import Certificate, certify
     from .control.interval import IntervalPassivityController
     from .control.synthesis import synthesize
