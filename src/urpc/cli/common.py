@@ -185,7 +185,7 @@ def show_progress(args) -> bool:
 
 def output_folder(out: Path | None, default: Path) -> Path:
     """The output folder of a command (``out``, or ``default`` under :data:`RESULTS_ROOT`),
-    checked writable before any work starts (:func:`urpc.sim.results.check_writable`)."""
+    checked writable before any work starts (:func:`urpc.atomic.check_writable`)."""
     from ..atomic import check_writable
 
     return check_writable(default if out is None else out)
