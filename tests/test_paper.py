@@ -93,6 +93,33 @@ def test_results_json_has_one_summary_per_run(reproduction):
         assert run["sample_period"] == {1: None, 2: 1e-4, 3: 1e-3}[run["scenario"]]
 
 
+def test_the_markdown_table_shows_each_runs_own_summary(reproduction):
+    """Each row of results.md, read back, is that run's summary.json: met, entry time, final
+    error and phi (``-`` for r-alpha, which has none) to the printed 4 digits."""
+    out, _, _ = reproduction
+    lines = (out / "results.md").read_text().splitlines()
+    header = next(line for line in lines if line.startswith("| scenario |"))
+    columns = [c.strip() for c in header.strip("|").split("|")]
+    rows = [line for line in lines[lines.index(header) + 2 :] if line.startswith("| ")][:12]
+    assert len(rows) == 12
+    for line in rows:
+        cells = dict(zip(columns, (c.strip() for c in line.strip("|").split("|")), strict=True))
+        folder = f"s{cells['scenario']}_ic{cells['IC'][-1]}-{cells['controller']}"
+        summary = json.loads((out / "runs" / folder / "summary.json").read_text())
+        assert cells["met"] == ("yes" if summary["met"] else "no"), folder
+        for column, key in (
+            ("entry time [s]", "entry_time"),
+            ("final error [rad]", "final_error"),
+            ("phi [N m s/rad]", "phi"),
+        ):
+            value = summary.get(key)
+            if value is None:
+                assert cells[column] == "-", (folder, column)
+            else:
+                assert float(cells[column]) == pytest.approx(value, rel=5e-4), (folder, column)
+        assert ("phi" in summary) == (cells["controller"] == "interval")
+
+
 def test_parallel_runs_equal_serial_runs(reproduction):
     out, _, _ = reproduction
     for number, ic, controller in ((3, 2, "interval"), (2, 1, "r-alpha"), (1, 2, "interval")):
