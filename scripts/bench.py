@@ -16,7 +16,7 @@ import argparse
 import json
 import sys
 
-from urpc.cli.common import jsonable
+from urpc.jsonsafe import jsonable
 from urpc.studies.benchmark import (
     BENCHMARK_ROBOTS,
     DRIVE_ROBOTS,

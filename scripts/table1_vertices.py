@@ -65,7 +65,6 @@ def run(job: tuple) -> dict:
             urpc.PaperTrajectory(),
             duration=duration,
             q0=q0,
-            sample_period=PERIOD,
             disturbance_bound=DISTURBANCE,
             disturbance=disturbance,
             seed=seed,

@@ -264,7 +264,6 @@ def _simulate(**changes):
     robot, box, controller = _rr()
     arguments = dict(
         plant=robot, controller=controller, trajectory=urpc.PaperTrajectory(), duration=0.01,
-        sample_period=1e-3,
     )  # fmt: skip
     arguments.update(changes)
     return urpc.simulate(**arguments)
@@ -279,8 +278,8 @@ def _save_into_a_file(tmp: Path):
 def _paper_trajectory_on_ur5(tmp: Path):
     ur5 = urpc.load_robot("ur5")
     box = urpc.parse_uncertainty({"links": {"wrist_3_link": {"mass": "10%"}}}, ur5)
-    controller = urpc.synthesize(ur5, box, epsilon=1e-2)
-    return urpc.simulate(ur5, controller, urpc.PaperTrajectory(), duration=0.01, sample_period=1e-3)
+    controller = urpc.synthesize(ur5, box, epsilon=1e-2, sample_period=1e-3)
+    return urpc.simulate(ur5, controller, urpc.PaperTrajectory(), duration=0.01)
 
 
 API_CASES: dict[str, tuple[Callable[[Path], object], tuple[str, ...]]] = {
@@ -344,18 +343,14 @@ def test_array_likes_are_accepted_where_arrays_are_expected():
     assert np.all(np.isfinite(result.q))
 
 
-def test_simulating_at_another_period_than_the_synthesis_one_warns():
-    from urpc.sim.simulation import SamplePeriodWarning
-
-    with pytest.warns(SamplePeriodWarning, match="synthesized for a sample period of 0.001 s"):
+def test_a_controller_runs_at_the_period_it_was_synthesized_for():
+    """The period is stated once, at synthesis: simulate takes no second copy."""
+    robot, box, controller = _rr()
+    sampled = _simulate(duration=0.02)
+    assert sampled.sample_period == controller.sample_period == 1e-3 and len(sampled.t) == 21
+    continuous = _simulate(controller=urpc.synthesize(robot, box, epsilon=1e-2), duration=0.02)
+    assert continuous.sample_period is None and continuous.info["integrator"] == "Radau"
+    with pytest.raises(TypeError, match="sample_period"):
         _simulate(sample_period=2e-3)
-    with pytest.warns(SamplePeriodWarning, match="in continuous time"):
-        _simulate(sample_period=None)
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", SamplePeriodWarning)
-        _simulate(sample_period=1e-3)
-        robot, box, _ = _rr()
-        continuous = urpc.synthesize(robot, box, epsilon=1e-2)  # no period: no warning
-        _simulate(controller=continuous, sample_period=2e-3)
+    with pytest.raises(InputError, match="field 'sample_period'"):
+        urpc.synthesize(robot, box, epsilon=1e-2, sample_period=-1e-3)

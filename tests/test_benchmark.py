@@ -1,7 +1,8 @@
-"""The performance suite (``urpc.studies.benchmark.run_benchmarks``, ``urpc bench``): structure only.
+"""The performance suite (``urpc.studies.benchmark.run_benchmarks``, ``urpc bench``).
 
 Speed targets are not asserted (the machine is shared); the tests check that every figure is
-there, positive and finite, on a tiny configuration that runs in a few seconds.
+there, positive and finite, on a tiny configuration that runs in a few seconds, and that the
+figures agree with each other: a ratio is its two timings divided, the table prints the timings.
 """
 
 from __future__ import annotations
@@ -52,6 +53,9 @@ def _check_suite(result: dict) -> None:
     for figure in ("sim_speed", "synthesis"):
         assert all(_positive_finite(v) for v in result[figure].values())
     assert _positive_finite(result["campaign_runs_per_minute"])
+    # rho / RNEA is the two measured timings divided, not a separate measurement.
+    ratio = result["rho"]["rr_planar"]["hull"] / result["rnea"]["rr_planar"]
+    assert result["rho_over_rnea"]["rr_planar"]["hull"] == ratio
     machine = result["machine"]
     assert machine["cpu_count"] >= 1 and machine["python"] and machine["pinocchio"]
 
@@ -62,6 +66,8 @@ def test_quick_suite_has_every_figure_positive_and_finite():
     table = format_benchmarks(result, TINY)
     assert table.count("\n") == 1 + 8  # header, rule, one row per figure and case
     assert "rr_planar / hull" in table and "<= 10 us" in table
+    row = next(line for line in table.splitlines() if "rr_planar / hull" in line)
+    assert f"{1e6 * result['rho']['rr_planar']['hull']:.1f}" in row  # the measured rho, in us
 
 
 def test_cli_bench_json_prints_one_object(capsys, monkeypatch):

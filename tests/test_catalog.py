@@ -57,7 +57,7 @@ true = urpc.load_parameter_point("rr_planar", robot, box)
 scenario = urpc.load_scenario("rr_planar/s2_ic1")
 controller = urpc.synthesize(robot, box, epsilon=1e-2, sample_period=1e-3)
 result = urpc.simulate(box.plant(robot, true), controller, PaperTrajectory(),
-                       duration=0.2, q0=np.zeros(2), sample_period=1e-3, disturbance_bound=10.0)
+                       duration=0.2, q0=np.zeros(2), disturbance_bound=10.0)
 print(true["link2"][0], scenario.name, result.metrics["final_error"] > 0)
 """
     done = subprocess.run(

@@ -147,7 +147,7 @@ def test_a_certified_floor_bounds_every_vertex_under_the_worst_disturbance(rr, r
     for vertex in range(8):
         result = urpc.simulate(
             rr_box.plant(rr, rr_box.vertex(vertex)), controller, PaperTrajectory(),
-            duration=2.0, q0=np.zeros(2), sample_period=period, disturbance_bound=10.0,
+            duration=2.0, q0=np.zeros(2), disturbance_bound=10.0,
             disturbance="worst", controller_state0=_saturated(controller),
         )  # fmt: skip
         worst = max(worst, _final_error(result))
@@ -166,7 +166,7 @@ def test_the_floor_bounds_sampled_ur5_plants_under_the_worst_disturbance(ur5):
     for k, point in enumerate(points):
         result = urpc.simulate(
             box.plant(ur5, point), controller, trajectory, duration=1.0,
-            q0=trajectory.reference(0.0).q, sample_period=period, disturbance_bound=2.0,
+            q0=trajectory.reference(0.0).q, disturbance_bound=2.0,
             disturbance="worst", controller_state0=_saturated(controller),
         )  # fmt: skip
         assert _final_error(result, 0.5) <= certificate.epsilon_floor, (k, certificate.summary())
@@ -180,7 +180,7 @@ def test_the_time_above_epsilon_before_saturation_is_bounded(rr, rr_box):
     bound = certificate.figures["time_above_epsilon_before_saturation"]
     result = urpc.simulate(
         rr_box.plant(rr, rr_box.vertex(7)), controller, PaperTrajectory(), duration=DURATION,
-        q0=np.array([0.3, -0.2]), sample_period=5e-4, disturbance_bound=10.0, disturbance="worst",
+        q0=np.array([0.3, -0.2]), disturbance_bound=10.0, disturbance="worst",
     )  # fmt: skip
     above = float(np.sum(result.error_norm >= 1e-2)) * 5e-4
     assert above <= bound
@@ -266,7 +266,7 @@ def test_a_one_joint_robot_is_certified_and_runs(tmp_path):
     assert certificate.certified, certificate.summary()
     result = urpc.simulate(
         box.plant(robot, box.vertex(1)), controller, trajectory, duration=2.0,
-        q0=trajectory.reference(0.0).q, sample_period=1e-3, disturbance_bound=1.0,
+        q0=trajectory.reference(0.0).q, disturbance_bound=1.0,
         disturbance="worst",
     )  # fmt: skip
     assert result.metrics["met"]

@@ -110,15 +110,6 @@ def test_plant_lists_its_choices_everywhere(capsys, command):
     assert "--plant {pinocchio,mujoco}" in _help(capsys, *command)
 
 
-def test_choices_named_in_the_cli_are_the_packages_own():
-    from urpc.bounds import METHODS
-    from urpc.cli.common import BOUND_METHODS, CONTROLLERS
-    from urpc.formats.scenario import ControllerName
-
-    assert set(BOUND_METHODS) == set(METHODS)
-    assert set(CONTROLLERS) == set(ControllerName.__args__)
-
-
 def test_check_and_bound_take_the_robot_positional_or_as_robot(capsys):
     positional = _run(capsys, "check", "rr_planar", "--json")
     option = _run(capsys, "check", "--robot", "rr_planar", "--json")

@@ -22,8 +22,8 @@ from urpc.sim.metrics import METRIC_NAMES
 from urpc.sim.results import SimulationResult
 from urpc.studies.scenario import build, load_scenario, run_scenario, sample_true_parameters
 
-SUMMARY_KEYS = {
-    *METRIC_NAMES, "epsilon", "controller", "scenario", "plant", "true_parameters",
+SUMMARY_KEYS = {  # "phi", "kappa": the interval law's diagnostics
+    *METRIC_NAMES, "phi", "kappa", "epsilon", "controller", "scenario", "plant", "true_parameters",
     "certified", "not_certified", "certificate", "final_error_window",
 }  # fmt: skip
 TIMINGS = ("step_time_median", "wall_time")
@@ -66,7 +66,7 @@ def test_flags_override_the_scenario_file(capsys):
         "--sample-period", "1e-3", "--duration", "0.2", "--seed", "3",
     )  # fmt: skip
     assert summary["controller"] == "r-alpha" and summary["epsilon"] == 0.05
-    assert summary["phi"] is None and summary["kappa"] is None  # r-alpha has no adaptive gains
+    assert "phi" not in summary and "kappa" not in summary  # r-alpha has no diagnostics
     scenario = load_scenario("rr_planar/s2_ic1").with_overrides(
         controller="r-alpha", epsilon=0.05, sample_period=1e-3, duration=0.2, seed=3
     )

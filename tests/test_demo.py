@@ -112,8 +112,10 @@ def test_tool_change_carries_the_controller_state_over():
         t_change=0.03, duration=0.3, initial_offset=0.02, sample_period=None, disturbance_bound=0
     )
     first, second = run.segments
-    assert first.phi[-1] > 100.0  # the integral has grown before the change
-    assert second.phi[0] == first.phi[-1] and second.kappa[0] == first.kappa[-1]
+    before, after = first.diagnostics, second.diagnostics
+    assert before["phi"][-1] > 100.0  # the integral has grown before the change
+    assert after["phi"][0] == before["phi"][-1] and after["kappa"][0] == before["kappa"][-1]
+    assert run.result.diagnostics["phi"][-1] == after["phi"][-1]  # the concatenation keeps them
     np.testing.assert_array_equal(run.state_after, run.state_before)
     # The plant state and the reference continue across the switch.
     np.testing.assert_array_equal(second.q[0], first.q[-1])
@@ -154,7 +156,7 @@ def test_a_start_off_the_reference_adapts_and_meets_epsilon_at_1_khz():
     assert run.failure is None
     metrics = run.result.metrics
     assert run.result.error_norm[0] > run.result.epsilon
-    assert run.result.phi.max() > 1.0  # the gains adapted
+    assert run.result.diagnostics["phi"].max() > 1.0  # the gains adapted
     assert metrics["met"] and 0 < metrics["entry_time"] < 0.15
 
 

@@ -138,9 +138,10 @@ def test_dead_zone_integral_and_theorem_selection(rr, rr_box):
     inside = Reference(np.array([0.006, -0.0079]), np.zeros(2), np.zeros(2))
     assert adaptive.state_derivative(0, q, q, ref, np.zeros(1))[0] == pytest.approx(0.01)
     assert adaptive.state_derivative(0, q, q, inside, np.zeros(1))[0] == 0.0
-    advanced = adaptive.advance(0, q, q, ref, np.array([0.5]), 1e-3)
+    held = synthesize(rr, rr_box, 1e-2, sample_period=1e-3, sampled_law="paper")
+    advanced = held.advance(0, q, q, ref, np.array([0.5]))  # one period T = 1e-3 s
     assert advanced[0] == pytest.approx(0.5 + 1e-5)
-    assert adaptive.advance(0, q, q, inside, np.array([0.5]), 1e-3)[0] == 0.5
+    assert held.advance(0, q, q, inside, np.array([0.5]))[0] == 0.5
 
     known = synthesize(rr, dataclasses.replace(rr_box, disturbance_bound=10.0), 1e-2)
     assert not known.adaptive and known.n_states == 0
@@ -273,7 +274,7 @@ def test_scenario1_ic1_meets_epsilon(rr, rr_box, true_plant):
 def test_scenario3_meets_epsilon_with_unknown_disturbance(rr, rr_box, true_plant, ic):
     """The paper's scenario 3: 1 kHz zero-order hold, ||d|| <= 10 N m unknown, epsilon = 1e-2."""
     epsilon = 1e-2
-    controller = synthesize(rr, rr_box, epsilon)
+    controller = synthesize(rr, rr_box, epsilon, sample_period=1e-3, sampled_law="paper")
     q0 = [0.0, 0.0] if ic == "IC1" else [2 * epsilon, -2 * epsilon]
     result = simulate(
         true_plant,
@@ -282,7 +283,6 @@ def test_scenario3_meets_epsilon_with_unknown_disturbance(rr, rr_box, true_plant
         duration=6.0,
         q0=q0,
         qd0=[0, 0],
-        sample_period=1e-3,
         disturbance_bound=10.0,
         seed=7,
     )
@@ -357,7 +357,7 @@ def test_adaptation_stops_at_the_gain_ceiling():
     _, _, controller = _panda_controller(1e-3)
     s_max = (controller.phi_max - controller.phi_P) / controller.phi_I
     ref = Reference(np.full(7, 0.5), np.zeros(7), np.zeros(7))
-    state = controller.advance(0.0, np.zeros(7), np.zeros(7), ref, np.array([s_max * 0.999]), 1.0)
+    state = controller.advance(0.0, np.zeros(7), np.zeros(7), ref, np.array([s_max * 0.999]))
     assert state[0] == s_max
     assert controller.gains(state)[0] == pytest.approx(controller.phi_max)
     frozen = controller.state_derivative(0.0, np.zeros(7), np.zeros(7), ref, state)

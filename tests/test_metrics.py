@@ -17,23 +17,16 @@ def _grid(duration=8.0, rate=1000.0):
     return np.arange(round(duration * rate) + 1) / rate
 
 
-def test_keys_are_exactly_the_metric_names():
+def test_diagnostic_series_add_their_final_value_under_their_own_name():
+    """The keys are the fixed metrics plus one per diagnostic series, whatever its name: the
+    metrics know no controller's gains."""
     t = _grid(2.0)
-    metrics = series_metrics(t, np.zeros_like(t), np.zeros((len(t), 2)), EPSILON)
-    assert tuple(metrics) == METRIC_NAMES
-    assert METRIC_NAMES == (
-        "entry_time",
-        "met",
-        "max_error_after_entry",
-        "final_error",
-        "torque_rms",
-        "torque_peak",
-        "torque_variation",
-        "phi",
-        "kappa",
-        "step_time_median",
-        "wall_time",
-    )
+    plain = series_metrics(t, np.zeros_like(t), np.zeros((len(t), 2)), EPSILON)
+    assert set(plain) == set(METRIC_NAMES)
+    named = {"gain": np.linspace(0.0, 3.0, len(t)), "other": np.full(len(t), np.nan)}
+    metrics = series_metrics(t, np.zeros_like(t), np.zeros((len(t), 2)), EPSILON, diagnostics=named)
+    assert set(metrics) - set(METRIC_NAMES) == {"gain", "other"}
+    assert metrics["gain"] == 3.0 and metrics["other"] is None  # the last value; NaN: none
 
 
 def test_entry_time_is_the_start_of_the_final_stay_inside():
@@ -97,9 +90,11 @@ def test_gains_and_timings_are_optional():
     t = _grid(1.0)
     zeros = np.zeros(len(t))
     plain = series_metrics(t, zeros, np.zeros((len(t), 2)), EPSILON)
-    assert plain["phi"] is None and plain["kappa"] is None
+    assert "phi" not in plain and "kappa" not in plain
     assert plain["step_time_median"] is None and plain["wall_time"] is None
-    nan = series_metrics(t, zeros, np.zeros((len(t), 2)), EPSILON, phi=zeros + np.nan)
+    nan = series_metrics(
+        t, zeros, np.zeros((len(t), 2)), EPSILON, diagnostics={"phi": zeros + np.nan}
+    )
     assert nan["phi"] is None
     phi = np.linspace(1.0, 7.0, len(t))
     full = series_metrics(
@@ -107,8 +102,7 @@ def test_gains_and_timings_are_optional():
         zeros,
         np.zeros((len(t), 2)),
         EPSILON,
-        phi=phi,
-        kappa=phi / 2,
+        diagnostics={"phi": phi, "kappa": phi / 2},
         step_time_median=2e-5,
         wall_time=1.5,
     )

@@ -57,8 +57,8 @@ class LateInfinity(Controller):
     name = "late-inf"
     epsilon = 0.01
 
-    def __init__(self, t_bad: float, value: float = np.inf):
-        self.t_bad, self.value = t_bad, value
+    def __init__(self, t_bad: float, value: float = np.inf, sample_period: float | None = None):
+        self.t_bad, self.value, self.sample_period = t_bad, value, sample_period
 
     def output(self, t, q, qd, reference, state):
         return np.array([self.value, 0.0]) if t >= self.t_bad else np.zeros(2)
@@ -70,11 +70,10 @@ def test_an_infinite_torque_is_not_clipped_to_the_limit(rr, rr_box, sample_perio
     with pytest.raises(SimulationError, match="non-finite"):
         simulate(
             rr,
-            LateInfinity(0.05),
+            LateInfinity(0.05, sample_period=sample_period),
             PaperTrajectory(),
             duration=0.2,
             q0=[0, 0],
-            sample_period=sample_period,
             torque_limit=100.0,
         )
 
@@ -83,11 +82,10 @@ def test_a_non_finite_torque_at_the_last_sample_is_an_error(rr):
     with pytest.raises(SimulationError, match="non-finite"):
         simulate(
             rr,
-            LateInfinity(0.2, np.nan),
+            LateInfinity(0.2, np.nan, sample_period=1e-2),
             PaperTrajectory(),
             duration=0.2,
             q0=[0, 0],
-            sample_period=1e-2,
         )
 
 

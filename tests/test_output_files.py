@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from urpc.sim.results import PARTIAL_SUFFIX, write_files
+from urpc.atomic import PARTIAL_SUFFIX, write_files
 
 
 @pytest.fixture

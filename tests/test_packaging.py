@@ -20,10 +20,3 @@ def test_every_subpackage_is_listed_in_pyproject():
         for init in (ROOT / "src" / "urpc").rglob("__init__.py")
     }
     assert found <= listed, sorted(found - listed)
-
-
-def test_the_cli_lists_the_plant_backends_that_exist():
-    from urpc.sim import PLANT_BACKENDS
-    from urpc.sim.plants import PLANTS
-
-    assert PLANT_BACKENDS == tuple(PLANTS)

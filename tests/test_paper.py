@@ -19,7 +19,7 @@ from urpc.control.r_alpha import PAPER_BETAS, estimate_betas
 from urpc.model.robot import load_robot
 from urpc.model.uncertainty import load_uncertainty
 from urpc.sim.metrics import METRIC_NAMES
-from urpc.sim.results import SimulationResult, write_files
+from urpc.sim.results import SimulationResult
 from urpc.studies.paper import PAPER_CONTROLLERS, PAPER_RUNS, reproduce_paper
 from urpc.studies.scenario import load_scenario, run_scenario
 
@@ -93,14 +93,44 @@ def test_results_json_has_one_summary_per_run(reproduction):
         assert run["sample_period"] == {1: None, 2: 1e-4, 3: 1e-3}[run["scenario"]]
 
 
+def test_the_markdown_table_shows_each_runs_own_summary(reproduction):
+    """Each row of results.md, read back, is that run's summary.json: met, entry time, final
+    error and phi (``-`` for r-alpha, which has none) to the printed 4 digits."""
+    out, _, _ = reproduction
+    lines = (out / "results.md").read_text().splitlines()
+    header = next(line for line in lines if line.startswith("| scenario |"))
+    columns = [c.strip() for c in header.strip("|").split("|")]
+    rows = [line for line in lines[lines.index(header) + 2 :] if line.startswith("| ")][:12]
+    assert len(rows) == 12
+    for line in rows:
+        cells = dict(zip(columns, (c.strip() for c in line.strip("|").split("|")), strict=True))
+        folder = f"s{cells['scenario']}_ic{cells['IC'][-1]}-{cells['controller']}"
+        summary = json.loads((out / "runs" / folder / "summary.json").read_text())
+        assert cells["met"] == ("yes" if summary["met"] else "no"), folder
+        for column, key in (
+            ("entry time [s]", "entry_time"),
+            ("final error [rad]", "final_error"),
+            ("phi [N m s/rad]", "phi"),
+        ):
+            value = summary.get(key)
+            if value is None:
+                assert cells[column] == "-", (folder, column)
+            else:
+                assert float(cells[column]) == pytest.approx(value, rel=5e-4), (folder, column)
+        assert ("phi" in summary) == (cells["controller"] == "interval")
+
+
 def test_parallel_runs_equal_serial_runs(reproduction):
     out, _, _ = reproduction
     for number, ic, controller in ((3, 2, "interval"), (2, 1, "r-alpha"), (1, 2, "interval")):
         scenario = load_scenario(f"rr_planar/s{number}_ic{ic}").with_overrides(duration=DURATION)
         serial = run_scenario(scenario, controller)
         parallel = SimulationResult.load(out / "runs" / f"s{number}_ic{ic}-{controller}")
-        for name in ("t", "q", "qd", "torque", "disturbance", "phi", "kappa"):
+        for name in ("t", "q", "qd", "torque", "disturbance"):
             np.testing.assert_array_equal(getattr(parallel, name), getattr(serial, name))
+        assert parallel.diagnostics.keys() == serial.diagnostics.keys()
+        for name, series in serial.diagnostics.items():
+            np.testing.assert_array_equal(parallel.diagnostics[name], series)
 
 
 def test_betas_and_design_conditions(reproduction):
@@ -145,22 +175,3 @@ def test_cli_runs_serially_and_prints_one_json_object(capsys, tmp_path):
     assert len(document["runs"]) == 12 and document["workers"] == 1
     assert document["out_dir"] == str(tmp_path / "p")
     assert json.loads((tmp_path / "p" / "results.json").read_text())["runs"] == document["runs"]
-
-
-def test_write_files_replaces_what_it_writes_and_keeps_the_rest(tmp_path):
-    target = tmp_path / "out"
-    write_files(
-        target, {"a.txt": lambda p: p.write_text("1"), "sub/b.txt": lambda p: p.write_text("2")}
-    )
-    (target / "mine.txt").write_text("keep")
-
-    def broken(path):
-        path.write_text("half")
-        raise OSError("disk full")
-
-    with pytest.raises(OSError):
-        write_files(target, {"a.txt": lambda p: p.write_text("new"), "c.txt": broken})
-    assert (target / "a.txt").read_text() == "1" and not (target / "c.txt").exists()
-    write_files(target, {"sub/b.txt": lambda p: p.write_text("3")})
-    assert (target / "sub" / "b.txt").read_text() == "3" and (target / "mine.txt").is_file()
-    assert sorted(p.name for p in target.iterdir()) == ["a.txt", "mine.txt", "sub"]

@@ -34,7 +34,7 @@ class PaperTrajectory:
 @pytest.fixture(scope="module")
 def result(rr, rr_box, rr_true_point):
     plant = rr_box.plant(rr, rr_true_point)
-    controller = synthesize(rr, rr_box, 1e-2)
+    controller = synthesize(rr, rr_box, 1e-2, sample_period=1e-3, sampled_law="paper")
     return simulate(
         plant,
         controller,
@@ -42,7 +42,6 @@ def result(rr, rr_box, rr_true_point):
         duration=0.5,
         q0=[0.02, -0.02],
         qd0=[0, 0],
-        sample_period=1e-3,
         disturbance_bound=10.0,
         seed=3,
         scenario="scenario 3",
@@ -50,14 +49,15 @@ def result(rr, rr_box, rr_true_point):
     )
 
 
-SUMMARY_KEYS = {*METRIC_NAMES, "epsilon", "controller"}
+SUMMARY_KEYS = {*METRIC_NAMES, "phi", "kappa", "epsilon", "controller"}
 
 
 def test_summary_is_the_metrics_plus_epsilon_and_controller(result):
     summary = result.summary()
     assert set(summary) == SUMMARY_KEYS
     assert summary["controller"] == "interval" and summary["epsilon"] == 1e-2
-    assert {k: summary[k] for k in METRIC_NAMES} == result.metrics
+    assert {k: summary[k] for k in (*METRIC_NAMES, "phi", "kappa")} == result.metrics
+    assert summary["phi"] == result.diagnostics["phi"][-1]  # a diagnostic's final value
     np.testing.assert_allclose(result.error, result.q_desired - result.q)
     np.testing.assert_allclose(result.error_norm, np.linalg.norm(result.error, axis=1))
 
@@ -99,13 +99,17 @@ def test_save_writes_the_three_files_and_loads_back(result, tmp_path):
     assert body.shape == (len(result.t), len(header))
     np.testing.assert_allclose(body[:, header.index("e_norm")], result.error_norm, rtol=1e-11)
     np.testing.assert_allclose(body[:, header.index("u_2")], result.torque[:, 1], rtol=1e-11)
-    np.testing.assert_allclose(body[:, header.index("phi")], result.phi, rtol=1e-11)
+    np.testing.assert_allclose(body[:, header.index("phi")], result.diagnostics["phi"], rtol=1e-11)
 
     loaded = SimulationResult.load(directory)
     for item in dataclasses.fields(SimulationResult):
         original, copy = getattr(result, item.name), getattr(loaded, item.name)
         if isinstance(original, np.ndarray):
             np.testing.assert_array_equal(copy, original)
+        elif item.name == "diagnostics":
+            assert list(copy) == list(original) == ["phi", "kappa"]
+            for name, series in original.items():
+                np.testing.assert_array_equal(copy[name], series)
         else:
             assert copy == original, item.name
     assert loaded.metrics == result.metrics

@@ -39,7 +39,7 @@ def test_loop_matches_the_sampled_simulator(rr):
     report, loop, _ = lockstep(plant, controller, robot, 0.5)
     assert report.ok and report.cycles == 501
     simulated = urpc.simulate(
-        plant, controller, urpc.PaperTrajectory(), duration=0.5, q0=np.zeros(2), sample_period=1e-3
+        plant, controller, urpc.PaperTrajectory(), duration=0.5, q0=np.zeros(2)
     )
     logged = loop.series()
     # Same law, same plant; the arm integrates with 2 RK4 steps per period, the simulator 10.
@@ -112,7 +112,7 @@ def test_delayed_law_state_and_save(rr, tmp_path):
         controller.output(0.7, q, reference.qd, reference, state),
         loaded.output(0.7, q, reference.qd, reference, state),
     )
-    advanced = controller.advance(0.7, q, reference.qd, reference, state, 1e-3)
+    advanced = controller.advance(0.7, q, reference.qd, reference, state)
     assert np.array_equal(advanced[1:], controller.output(0.7, q, reference.qd, reference, state))
 
 

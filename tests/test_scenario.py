@@ -24,6 +24,7 @@ from urpc.studies.scenario import (
     parse_scenario,
     run_scenario,
     shipped_scenarios,
+    simulate_setup,
     true_parameter_values,
 )
 from urpc.trajectories import PaperTrajectory, QuinticTrajectory, SinusoidTrajectory
@@ -363,3 +364,15 @@ def test_sampled_law_follows_the_scenario():
     continuous = interval_synthesis_options(load_scenario("rr_planar/s1_ic1"))
     assert continuous["sample_period"] is None
     assert build_controller(build(implicit)).name == "interval"
+
+
+def test_every_controller_runs_at_the_scenario_period_and_a_mismatch_is_an_error():
+    """The scenario's period reaches each law through synthesis; a controller built for another
+    period is refused rather than run at a period it was not built for."""
+    scenario = load_scenario("rr_planar/s3_ic1").with_overrides(duration=0.01)
+    setup = build(scenario)
+    for name in CONTROLLERS:
+        assert build_controller(setup, name).sample_period == 1e-3, name
+    faster = build_controller(build(scenario.with_overrides(sample_period=1e-4)))
+    with pytest.raises(InputError, match="runs at T = 0.0001 s, the scenario at T = 0.001 s"):
+        simulate_setup(setup, faster)

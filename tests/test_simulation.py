@@ -37,6 +37,13 @@ class PaperTrajectory:
         return Reference(self.amplitude * s, self.amplitude * sd, self.amplitude * sdd)
 
 
+def at(period, controller):
+    """``controller`` set to run at ``period`` [s] (``None``: continuous time): a test law owns
+    its period as a synthesized one does."""
+    controller.sample_period = period
+    return controller
+
+
 class ConstantTorque(Controller):
     name = "constant"
 
@@ -98,12 +105,11 @@ def test_open_loop_plant_follows_the_textbook_true_dynamics(true_plant, sample_p
     x0 = np.array([0.1, -0.2, 0.0, 0.5])
     result = simulate(
         true_plant,
-        ConstantTorque(torque),
+        at(sample_period, ConstantTorque(torque)),
         PaperTrajectory(),
         duration=1.0,
         q0=x0[:2],
         qd0=x0[2:],
-        sample_period=sample_period,
         epsilon=1.0,
     )
     reference = solve_ivp(
@@ -124,7 +130,7 @@ def test_zero_order_hold_feedback_and_disturbance_reach_the_plant(true_plant):
     """Sampled run: u is computed from the sampled state, held, and the plant sees u + d_k.
     Reference: the same loop written out, each period integrated by DOP853 on the textbook model."""
     period, duration = 5e-3, 0.3
-    controller, trajectory = PDPlusGravity(), PaperTrajectory()
+    controller, trajectory = at(period, PDPlusGravity()), PaperTrajectory()
     result = simulate(
         true_plant,
         controller,
@@ -132,7 +138,6 @@ def test_zero_order_hold_feedback_and_disturbance_reach_the_plant(true_plant):
         duration=duration,
         q0=[0.05, 0.0],
         qd0=[0.0, 0.0],
-        sample_period=period,
         disturbance_bound=10.0,
         seed=11,
     )
@@ -158,7 +163,7 @@ def test_zero_order_hold_feedback_and_disturbance_reach_the_plant(true_plant):
 
 def test_rk4_step_is_converged_at_the_default(rr, rr_box, true_plant):
     """Scenario 3 (1 kHz, disturbance): RK4 at 1e-4 s vs 1e-5 s steps agree to rounding."""
-    controller = synthesize(rr, rr_box, 1e-2)
+    controller = synthesize(rr, rr_box, 1e-2, sample_period=1e-3, sampled_law="paper")
     runs = [
         simulate(
             true_plant,
@@ -167,7 +172,6 @@ def test_rk4_step_is_converged_at_the_default(rr, rr_box, true_plant):
             duration=0.3,
             q0=[0, 0],
             qd0=[0, 0],
-            sample_period=1e-3,
             disturbance_bound=10.0,
             integration_step=step,
         )
@@ -180,11 +184,10 @@ def test_rk4_step_is_converged_at_the_default(rr, rr_box, true_plant):
 
 def test_sampled_with_a_tiny_period_agrees_with_continuous(rr, rr_box, true_plant):
     controller = synthesize(rr, rr_box, 1e-2)
+    held = synthesize(rr, rr_box, 1e-2, sample_period=1e-4, sampled_law="paper")
     trajectory = PaperTrajectory()
     continuous = simulate(true_plant, controller, trajectory, duration=1.0, q0=[0, 0], qd0=[0, 0])
-    sampled = simulate(
-        true_plant, controller, trajectory, duration=1.0, q0=[0, 0], qd0=[0, 0], sample_period=1e-4
-    )
+    sampled = simulate(true_plant, held, trajectory, duration=1.0, q0=[0, 0], qd0=[0, 0])
     assert len(sampled.t) == 10001 and len(continuous.t) == 1001
     every = sampled.t[::10]
     np.testing.assert_allclose(every, continuous.t, atol=1e-12)
@@ -224,15 +227,17 @@ def test_continuous_tolerances_are_converged(rr, rr_box, true_plant):
 
 # ----------------------------------------------------------------------------- features
 def test_torque_limit_clips_the_command_and_counts_saturation(true_plant):
-    kwargs = dict(duration=0.2, q0=[0, 0], qd0=[0, 0], sample_period=1e-3, epsilon=1.0)
+    kwargs = dict(duration=0.2, q0=[0, 0], qd0=[0, 0], epsilon=1.0)
     limited = simulate(
         true_plant,
-        ConstantTorque([300.0, -5.0]),
+        at(1e-3, ConstantTorque([300.0, -5.0])),
         PaperTrajectory(),
         torque_limit=[150.0, 50],
         **kwargs,
     )
-    clipped = simulate(true_plant, ConstantTorque([150.0, -5.0]), PaperTrajectory(), **kwargs)
+    clipped = simulate(
+        true_plant, at(1e-3, ConstantTorque([150.0, -5.0])), PaperTrajectory(), **kwargs
+    )
     np.testing.assert_allclose(limited.q, clipped.q, atol=1e-14)
     assert limited.saturated_samples == len(limited.t)
     assert clipped.saturated_samples == 0
@@ -256,13 +261,15 @@ def test_disturbance_is_uniform_in_the_ball_and_seeded():
 
 
 def test_runs_are_reproducible_and_the_controller_reusable(rr, rr_box, true_plant):
-    controller = synthesize(rr, rr_box, 1e-2)
-    kwargs = dict(duration=0.2, q0=[0, 0], qd0=[0, 0], sample_period=1e-3, disturbance_bound=10.0)
+    controller = synthesize(rr, rr_box, 1e-2, sample_period=1e-3, sampled_law="paper")
+    kwargs = dict(duration=0.2, q0=[0, 0], qd0=[0, 0], disturbance_bound=10.0)
     first = simulate(true_plant, controller, PaperTrajectory(), seed=5, **kwargs)
     again = simulate(true_plant, controller, PaperTrajectory(), seed=5, **kwargs)
     other = simulate(true_plant, controller, PaperTrajectory(), seed=6, **kwargs)
-    for name in ("q", "qd", "torque", "disturbance", "phi", "kappa"):
+    for name in ("q", "qd", "torque", "disturbance"):
         np.testing.assert_array_equal(getattr(first, name), getattr(again, name))
+    for name in ("phi", "kappa"):
+        np.testing.assert_array_equal(first.diagnostics[name], again.diagnostics[name])
     assert not np.array_equal(first.disturbance, other.disturbance)
     assert first.seed == 5 and first.controller == "interval" and first.epsilon == 1e-2
     assert first.step_time_median > 0 and first.wall_time > first.step_time_median
@@ -274,22 +281,20 @@ def test_divergence_raises_naming_time_and_state(true_plant, sample_period):
     with pytest.raises(SimulationError, match=r"diverged at t = .* s .*q = .* rad, qd = "):
         simulate(
             true_plant,
-            Unstable(),
+            at(sample_period, Unstable()),
             PaperTrajectory(),
             duration=5.0,
             q0=[0.01, 0],
             qd0=[0, 0],
-            sample_period=sample_period,
         )
     with pytest.raises(SimulationError, match="non-finite"):
         simulate(
             true_plant,
-            NotANumber(),
+            at(sample_period, NotANumber()),
             PaperTrajectory(),
             duration=0.2,
             q0=[0, 0],
             qd0=[0, 0],
-            sample_period=sample_period,
         )
 
 
@@ -297,11 +302,10 @@ def test_progress_reporting(true_plant, capsys):
     fractions = []
     simulate(
         true_plant,
-        ConstantTorque([0, 0]),
+        at(1e-3, ConstantTorque([0, 0])),
         PaperTrajectory(),
         duration=0.1,
         epsilon=1.0,
-        sample_period=1e-3,
         progress=fractions.append,
     )
     assert fractions[-1] == 1.0 and np.all(np.diff(fractions) > 0)
@@ -325,11 +329,10 @@ def test_progress_reporting(true_plant, capsys):
 
     simulate(
         true_plant,
-        ConstantTorque([0, 0]),
+        at(1e-3, ConstantTorque([0, 0])),
         PaperTrajectory(),
         duration=0.01,
         epsilon=1.0,
-        sample_period=1e-3,
         progress=True,
     )
     assert "simulate" in capsys.readouterr().err  # a tqdm bar on stderr
@@ -338,21 +341,24 @@ def test_progress_reporting(true_plant, capsys):
 def test_invalid_arguments_name_the_field(true_plant):
     controller, trajectory = ConstantTorque([0, 0]), PaperTrajectory()
     cases = [
-        (dict(duration=1.0, disturbance_bound=10.0), "disturbance_bound"),
-        (dict(duration=1.0, sample_period=-1e-3), "sample_period"),
-        (dict(duration=1.0, sample_period=2.0), "sample_period"),
-        (dict(duration=0.0), "duration"),
-        (dict(duration=1.0, q0=[0, 0, 0]), "q0"),
-        (dict(duration=1.0, torque_limit=0.0), "torque_limit"),
-        (dict(duration=1.0, method="Euler"), "method"),
-        (dict(duration=1.0, sample_period=1e-3, plant_backend="bullet"), "plant"),
-        (dict(duration=1.0, plant_backend="mujoco"), "plant"),  # continuous time
-        (dict(duration=1.0, controller_state0=[1.0]), "controller_state0"),  # static law
+        (None, dict(duration=1.0, disturbance_bound=10.0), "disturbance_bound"),
+        (2.0, dict(duration=1.0), "sample_period"),  # the controller's period is too long
+        (None, dict(duration=0.0), "duration"),
+        (None, dict(duration=1.0, q0=[0, 0, 0]), "q0"),
+        (None, dict(duration=1.0, torque_limit=0.0), "torque_limit"),
+        (None, dict(duration=1.0, method="Euler"), "method"),
+        (1e-3, dict(duration=1.0, plant_backend="bullet"), "plant"),
+        (None, dict(duration=1.0, plant_backend="mujoco"), "plant"),  # continuous time
+        (None, dict(duration=1.0, controller_state0=[1.0]), "controller_state0"),  # static law
     ]
-    for kwargs, field in cases:
+    for period, kwargs, field in cases:
         with pytest.raises(InputError) as info:
-            simulate(true_plant, controller, trajectory, epsilon=1.0, **kwargs)
+            simulate(true_plant, at(period, controller), trajectory, epsilon=1.0, **kwargs)
         assert info.value.field == field, kwargs
+    with pytest.raises(TypeError, match="sample_period"):  # the period is the controller's alone
+        simulate(true_plant, at(None, controller), trajectory, epsilon=1.0, duration=1.0,
+                 sample_period=1e-3)  # fmt: skip
+    controller.sample_period = None
     with pytest.raises(InputError) as info:  # no epsilon to judge the run against
         simulate(true_plant, controller, trajectory, duration=1.0)
     assert info.value.field == "epsilon"
@@ -367,13 +373,16 @@ def test_mujoco_backend_runs_the_same_sampled_loop(true_plant):
         duration=0.3,
         q0=[0.05, 0.0],
         qd0=[0.0, 0.0],
-        sample_period=5e-3,
         disturbance_bound=10.0,
         seed=2,
     )
     runs = {
         backend: simulate(
-            true_plant, PDPlusGravity(), PaperTrajectory(), plant_backend=backend, **kwargs
+            true_plant,
+            at(5e-3, PDPlusGravity()),
+            PaperTrajectory(),
+            plant_backend=backend,
+            **kwargs,
         )
         for backend in ("pinocchio", "mujoco")
     }
@@ -402,9 +411,9 @@ class Shifted:
 
 def test_controller_state0_continues_a_run(rr, rr_box, true_plant):
     """A 0.4 s run equals a 0.2 s run continued from its final plant and controller state."""
-    controller = synthesize(rr, rr_box, 1e-2)
+    controller = synthesize(rr, rr_box, 1e-2, sample_period=1e-3, sampled_law="paper")
     trajectory = PaperTrajectory()
-    kwargs = dict(sample_period=1e-3)
+    kwargs = {}
     whole = simulate(
         true_plant, controller, trajectory, duration=0.4, q0=[0.02, -0.02], qd0=[0, 0], **kwargs
     )
@@ -425,7 +434,9 @@ def test_controller_state0_continues_a_run(rr, rr_box, true_plant):
     )
     np.testing.assert_allclose(continued.q, whole.q[200:], atol=1e-9)
     np.testing.assert_allclose(continued.torque, whole.torque[200:], rtol=1e-9, atol=1e-6)
-    np.testing.assert_allclose(continued.phi, whole.phi[200:], rtol=1e-12)
+    np.testing.assert_allclose(
+        continued.diagnostics["phi"], whole.diagnostics["phi"][200:], rtol=1e-12
+    )
     restarted = simulate(
         true_plant,
         controller,
@@ -435,4 +446,4 @@ def test_controller_state0_continues_a_run(rr, rr_box, true_plant):
         qd0=first.qd[-1],
         **kwargs,
     )
-    assert restarted.phi[0] == controller.phi_P < continued.phi[0]
+    assert restarted.diagnostics["phi"][0] == controller.phi_P < continued.diagnostics["phi"][0]

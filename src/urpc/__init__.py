@@ -29,9 +29,9 @@ _LAZY = {
     "make_bound": (".bounds", "make_bound"),
     "Certificate": (".control.certificate", "Certificate"),
     "certify": (".control.certificate", "certify"),
+    "Controller": (".control.base", "Controller"),
     "IntervalPassivityController": (".control.interval", "IntervalPassivityController"),
     "synthesize": (".control.synthesis", "synthesize"),
-<<<<<<< HEAD
     "load_controller": (".control.controller_file", "load_controller"),
     "ControlLoop": (".robot.loop", "ControlLoop"),
     "SafetyLayer": (".robot.safety", "SafetyLayer"),
@@ -44,9 +44,7 @@ _LAZY = {
     "StreamedReference": (".trajectory_sources", "StreamedReference"),
     "from_samples": (".trajectory_sources", "from_samples"),
     "load_samples": (".trajectory_sources", "load_samples"),
-=======
     "identify": (".identify", "identify"),
->>>>>>> issue22
     "Assembly": (".model.modular", "Assembly"),
     "assemble": (".model.modular", "assemble"),
     "load_assembly": (".model.modular", "load_assembly"),
@@ -77,6 +75,7 @@ __all__ = [
     "Assembly",
     "BoundMethod",
     "Certificate",
+    "Controller",
     "InputError",
     "ParameterBox",
     "Robot",
@@ -104,7 +103,6 @@ __all__ = [
     "SimulationResult",
     "simulate",
     "synthesize",
-<<<<<<< HEAD
     "load_controller",
     "ControlLoop",
     "SafetyLayer",
@@ -117,9 +115,7 @@ __all__ = [
     "StreamedReference",
     "from_samples",
     "load_samples",
-=======
     "identify",
->>>>>>> issue22
     "assemble",
     "load_assembly",
     "load_module_library",
@@ -145,6 +141,7 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
     from .bounds import METHODS as BOUND_METHODS
     from .bounds import BoundMethod, default_method, make_bound
+    from .control.base import Controller
     from .control.certificate import Certificate, certify
     from .control.controller_file import load_controller
     from .control.interval import IntervalPassivityController

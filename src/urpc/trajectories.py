@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from . import names
 from .errors import InputError
 
 if TYPE_CHECKING:
@@ -299,14 +300,16 @@ class QuinticTrajectory(Trajectory):
 # ============================================================================ generic choice
 #: Largest amplitude generic trajectories use on a joint whose range is wide or unbounded.
 MAX_AMPLITUDE = {"revolute": 0.5, "continuous": 0.5, "prismatic": 0.05}  # [rad], [rad], [m]
-#: Kinds a scenario names; ``file`` and ``waypoints`` are built by :mod:`urpc.trajectory_sources`.
-TRAJECTORY_KINDS = ("paper", "sinusoid", "quintic", "file", "waypoints")
+#: Kinds a scenario names (:data:`urpc.names.TRAJECTORY_KINDS`); ``file`` and ``waypoints`` are
+#: built by :mod:`urpc.trajectory_sources`.
+TRAJECTORY_KINDS = names.TRAJECTORY_KINDS
 
 
 def home_configuration(robot: Robot) -> np.ndarray:
     """The middle of each joint's limits [rad or m], or 0 where a limit is infinite."""
     lower, upper = robot.position_limits
-    middle = 0.5 * (lower + upper)
+    with np.errstate(invalid="ignore"):  # -inf + inf on a continuous joint, replaced below
+        middle = 0.5 * (lower + upper)
     return np.where(np.isfinite(lower) & np.isfinite(upper), middle, 0.0)
 
 

@@ -4,6 +4,7 @@ the argument, instead of a numpy error (or a silent NaN) deep inside a simulatio
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -34,6 +35,17 @@ def positive_number(field: str, value: Any, expected: str) -> float:
         InputError: not a number (a text such as ``"0.01"`` is not one in the API), or out of
             range (``field`` named).
     """
+    return number_in(field, value, expected, lambda x: x > 0)
+
+
+def number_in(field: str, value: Any, expected: str, valid: Callable[[float], bool]) -> float:
+    """``value`` as a finite float for which ``valid`` holds (``lambda x: x >= 1``);
+    ``expected`` completes the message (e.g. ``"a finite number >= 1 (Theorem 1)"``).
+
+    Raises:
+        InputError: not a number (a text such as ``"0.01"`` is not one in the API), or out of
+            range (``field`` named).
+    """
     if isinstance(value, str | bytes | bool):
         raise InputError(
             f"{value!r} is a {type(value).__name__}, not a number; expected {expected}",
@@ -43,6 +55,6 @@ def positive_number(field: str, value: Any, expected: str) -> float:
         number = float(value)
     except (TypeError, ValueError):
         raise InputError(f"{value!r} is not a number; expected {expected}", field=field) from None
-    if not (math.isfinite(number) and number > 0):
+    if not (math.isfinite(number) and valid(number)):
         raise InputError(f"{value!r} is out of range; expected {expected}", field=field)
     return number

@@ -8,16 +8,16 @@ from __future__ import annotations
 from ..errors import InputError
 from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
+from ..names import BOUND_METHODS
 from .base import BoundMethod, check_box
 from .hull import HullBound
 from .rigorous import RigorousBound
 from .vertex import VertexBound
 
-METHODS: dict[str, type[BoundMethod]] = {
-    "hull": HullBound,
-    "vertex": VertexBound,
-    "rigorous": RigorousBound,
-}
+#: Bound method name (:data:`urpc.names.BOUND_METHODS`) -> class.
+METHODS: dict[str, type[BoundMethod]] = dict(
+    zip(BOUND_METHODS, (HullBound, VertexBound, RigorousBound), strict=True)
+)
 
 
 def make_bound(name: str, robot: Robot, box: ParameterBox) -> BoundMethod:

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..errors import InputError
+from ..names import BOUND_METHODS, CONTROLLERS  # noqa: F401  (re-exported for the commands)
 from ..wording import count  # noqa: F401  (re-exported for the commands)
 
 if TYPE_CHECKING:  # numpy is imported when a command needs it (start-up time of the CLI)
@@ -33,10 +34,6 @@ EXIT_INPUT = 2
 
 #: Root of the default output folders (``urpc-results/<job>``).
 RESULTS_ROOT = Path("urpc-results")
-#: Controllers and bound methods, named here so that the parser lists them without importing the
-#: controllers (``tests/test_cli.py`` checks them against the packages).
-CONTROLLERS = ("interval", "r-alpha", "computed-torque")
-BOUND_METHODS = ("vertex", "hull", "rigorous")
 
 
 #: What argparse must read as a (negative) value, not as an option: ``-5``, ``-0.1``, ``-1e-2``,
@@ -201,8 +198,8 @@ def show_progress(args) -> bool:
 
 def output_folder(out: Path | None, default: Path) -> Path:
     """The output folder of a command (``out``, or ``default`` under :data:`RESULTS_ROOT`),
-    checked writable before any work starts (:func:`urpc.sim.results.check_writable`)."""
-    from ..sim.results import check_writable
+    checked writable before any work starts (:func:`urpc.atomic.check_writable`)."""
+    from ..atomic import check_writable
 
     return check_writable(default if out is None else out)
 
@@ -231,6 +228,8 @@ def one_line(text: str) -> str:
 
 
 def json_text(payload: dict) -> str:
+    from ..jsonsafe import jsonable  # numpy, so not when the command line is parsed
+
     return json.dumps(jsonable(payload), indent=2, allow_nan=False)
 
 
@@ -242,21 +241,3 @@ def warn_uncertified(guarantee: dict) -> None:
     """One ``warning:`` line on stderr when a run's configuration is not certified."""
     if not guarantee["certified"]:
         print(f"warning: {guarantee['not_certified']}", file=sys.stderr)
-
-
-def jsonable(value):
-    import numpy as np
-
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return jsonable(value.tolist())
-    if isinstance(value, np.generic):
-        return jsonable(value.item())
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, Path):
-        return str(value)
-    return value

@@ -103,6 +103,7 @@ def register(commands) -> None:
 def run_robot(args) -> int:
     import numpy as np
 
+    from ..atomic import check_writable, write_files
     from ..control.controller_file import load_controller
     from ..control.synthesis import synthesize
     from ..errors import InputError
@@ -111,7 +112,6 @@ def run_robot(args) -> int:
     from ..robot.safety import SafetyLayer
     from ..robot.udp import UdpRobot, parse_address
     from ..robot.watchdog import Watchdog
-    from ..sim.results import check_writable, write_files
     from ..studies.scenario import build, load_scenario
     from ..studies.scenario.run import interval_synthesis_options
     from ..trajectory_sources import Approach, segment_durations

@@ -178,7 +178,8 @@ def run_simulate(args) -> int:
     if out is not None:
         import yaml
 
-        from ..sim.results import SUMMARY_NAME, write_files
+        from ..atomic import write_files
+        from ..sim.results import SUMMARY_NAME
 
         writers = result.writers(csv=True)
         summary_text = json_text(summary) + "\n"  # what --json prints: certified included
@@ -320,7 +321,7 @@ def _print_summary(result, scenario, setup, summary: dict, out: Path | None) -> 
     )
     if result.saturated_samples:
         print(f"saturation   the torque limit clipped {count(result.saturated_samples, 'sample')}")
-    if m["phi"] is not None:
+    if m.get("phi") is not None:
         print(
             f"gains        phi = {m['phi']:.4g} {force} s/{position}, "
             f"kappa = {m['kappa']:.4g} s/{position}"

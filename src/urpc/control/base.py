@@ -1,21 +1,29 @@
-"""The controller interface: a torque law with explicit internal state.
+"""The controller interface: a torque law with explicit internal state and its own period.
 
 A controller is built once (synthesis) and run many times. Its internal state (for example the
 integral of the paper's dead-zone ``f(||e||)``) is an explicit vector, so that the same law runs
 in continuous time (the state is integrated with the plant by the ODE solver) and sampled (the
 simulator advances it once per sample period with :meth:`Controller.advance`).
+
+The controller owns its sample period: :attr:`Controller.sample_period` is the period it was
+built for (``None``: continuous time), and :func:`urpc.simulate` runs it at that period, so the
+period is stated once, at synthesis.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from ..trajectories import Reference
+from ..validation import positive_number
 
-__all__ = ["Controller", "Reference"]
+if TYPE_CHECKING:
+    from ..model.robot import Robot
+
+__all__ = ["Controller", "Reference", "sample_period_of"]
 
 
 class Controller(ABC):
@@ -24,12 +32,35 @@ class Controller(ABC):
     ``state`` has length :attr:`n_states` (0 for static laws); its time derivative is
     :meth:`state_derivative`. Controllers must not keep hidden mutable state between calls except
     caches and timing counters, so that a controller can be reset and reused.
+
+    What callers (the simulator, the certificate, the reports) read, declared here with the
+    defaults of a law that has none of them:
+
+    Attributes:
+        name: Name used on the CLI and in result files.
+        n_states: Length of the internal state vector.
+        dof: Number of joints the law commands; ``None`` for a law that fits any arm.
+        robot: The model the law was built for; ``None`` for a law that uses no model (r-alpha).
+        sample_period: Control period ``T`` [s] the law runs at under a zero-order hold;
+            ``None``: continuous time.
+        epsilon: Required precision ``||e|| < epsilon`` [rad] the law is built for; ``None`` when
+            it has none (the simulation then needs one).
+        Kr: Diagonal gain [1/s] of the sliding variable ``r = ed + Kr e`` (a scalar or ``dof``
+            values), the direction an ``against`` disturbance pushes against; 1 for laws
+            without one.
+        diagnostic_units: Name -> unit of the scalars :meth:`diagnostics` returns (e.g.
+            ``{"phi": "N m s/rad"}``), recorded by the simulator as named series; empty for
+            laws with nothing to log.
     """
 
-    #: Name used on the CLI and in result files.
     name: ClassVar[str]
-    #: Length of the internal state vector.
+    diagnostic_units: ClassVar[dict[str, str]] = {}
     n_states: int = 0
+    dof: int | None = None
+    robot: Robot | None = None
+    sample_period: float | None = None
+    epsilon: float | None = None
+    Kr: float | np.ndarray = 1.0
 
     def initial_state(self) -> np.ndarray:
         """The internal state at ``t = 0``."""
@@ -48,19 +79,27 @@ class Controller(ABC):
         return np.zeros(self.n_states)
 
     def advance(
-        self,
-        t: float,
-        q: np.ndarray,
-        qd: np.ndarray,
-        reference: Reference,
-        state: np.ndarray,
-        sample_period: float,
+        self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
     ) -> np.ndarray:
-        """The state one sample period later, seen from the samples only (forward Euler)."""
+        """The state one :attr:`sample_period` later, seen from the samples only (forward
+        Euler)."""
         if self.n_states == 0:
             return state
-        return state + sample_period * self.state_derivative(t, q, qd, reference, state)
+        return state + self.sample_period * self.state_derivative(t, q, qd, reference, state)
 
     def diagnostics(self, state: np.ndarray) -> dict[str, float]:
-        """Named scalars of the internal state worth logging (e.g. ``phi``, ``kappa``)."""
+        """The scalars named in :attr:`diagnostic_units` at this state (e.g. ``phi``,
+        ``kappa``)."""
         return {}
+
+
+def sample_period_of(value: float | None) -> float | None:
+    """A controller's ``sample_period`` argument checked: ``None`` (continuous time) or a finite
+    number > 0 [s].
+
+    Raises:
+        InputError: not a number, or not finite and > 0 (field ``sample_period``).
+    """
+    if value is None:
+        return None
+    return positive_number("sample_period", value, "a finite number > 0 [s] or None")

@@ -327,6 +327,29 @@ class CellFloor:
         self._cache[key] = out
         return out
 
+    def inertia_figures(self, extension: float) -> dict[str, float]:
+        """Only ``lambda_L`` (the lightest mode of every piece's lower bound) and ``lambda_U``
+        over the cells at ``e = 0``: what Theorem 1 and the paper law's condition need, without
+        the mismatch and Coriolis enclosures."""
+        n, cells = self.dof, self.cells
+        q, _, _, _ = self._states(0.0, 0.0, extension)
+        centers = self.regressor.mass_matrices(Ball.point(q.val.mid), self._parameters)
+        diagonal = np.einsum("pi,ij->pij", self._armature, np.eye(n))
+        centers = Ball(centers.mid + diagonal, centers.rad)
+        along = Jet(
+            q.val.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n))),
+            Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
+        )
+        slopes = self.regressor.mass_matrices(along, self._parameters).dot
+        lower, upper = math.inf, 0.0
+        for index in range(2, len(self._parameters), 2):
+            low, _ = _relative(centers[:, index], slopes[:, :, index], q.val.rad)
+            high, _ = _relative(centers[:, index + 1], slopes[:, :, index + 1], q.val.rad)
+            lam_L = np.where(low.valid, low.lam_min * (1 - low.eps), -math.inf)
+            lower = min(lower, float(np.min(lam_L)) * (1 - LAPACK_MARGIN))
+            upper = max(upper, float(np.max(high.lam_max * (1 + high.eps))) * (1 + LAPACK_MARGIN))
+        return {"cells": float(cells), "lambda_L": lower, "lambda_U": upper}
+
     def _mismatch_parts(self, tube: float, r_max: float, extension: float):
         """``Y_SL`` over each cell of the reference at ``e = 0`` (a ball), and its Jacobian along
         each error direction ``e_k`` over the whole tube (a ball, (cells, k, n, 10 n)): at

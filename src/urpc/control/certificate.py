@@ -137,12 +137,10 @@ def certify(
     figures: dict[str, Any] = {}
     max_period = 0.0
     if controller.sample_period is None:
-        quantities = floor_of.quantities(0.0, 0.0, 0.0)
-        figures.update(floor_of.figures(quantities))
+        figures.update(floor_of.inertia_figures(0.0))
         floor = 0.0 if controller.adaptive else _theorem1_floor(figures, controller)
     elif law == "paper":
-        quantities = floor_of.quantities(0.0, 0.0, controller.sample_period)
-        figures.update(floor_of.figures(quantities))
+        figures.update(floor_of.inertia_figures(controller.sample_period))
         floor = math.inf
         limit = 2.0 * figures["lambda_L"] / controller.sample_period
         gain = math.inf if controller.adaptive else controller.phi_P

@@ -14,10 +14,10 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..errors import InputError
 from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
-from .base import Controller, Reference
+from ..validation import positive_number
+from .base import Controller, Reference, sample_period_of
 
 
 class ComputedTorqueController(Controller):
@@ -27,6 +27,8 @@ class ComputedTorqueController(Controller):
         robot: The model the controller believes in (the nominal robot).
         natural_frequency: ``omega_n`` [rad/s] of the error dynamics, > 0.
         damping: Damping ratio ``zeta`` (1: critically damped), > 0.
+        sample_period: Control period [s] the law runs at under a zero-order hold; ``None``
+            (default): continuous time.
 
     Raises:
         InputError: a non-positive or non-finite gain.
@@ -34,11 +36,19 @@ class ComputedTorqueController(Controller):
 
     name = "computed-torque"
 
-    def __init__(self, robot: Robot, *, natural_frequency: float = 10.0, damping: float = 1.0):
+    def __init__(
+        self,
+        robot: Robot,
+        *,
+        natural_frequency: float = 10.0,
+        damping: float = 1.0,
+        sample_period: float | None = None,
+    ):
         for label, value in (("natural_frequency", natural_frequency), ("damping", damping)):
-            if not np.isfinite(value) or value <= 0:
-                raise InputError(f"{label}={value} must be a finite number > 0", field=label)
+            positive_number(label, value, "a finite number > 0")
         self.robot = robot
+        self.dof = robot.dof
+        self.sample_period = sample_period_of(sample_period)
         self.natural_frequency = float(natural_frequency)
         self.damping = float(damping)
         self.Kp = self.natural_frequency**2  # [1/s^2]
@@ -66,8 +76,12 @@ def synthesize_computed_torque(
     *,
     natural_frequency: float = 10.0,
     damping: float = 1.0,
+    sample_period: float | None = None,
 ) -> ComputedTorqueController:
     """Computed torque on the nominal model of ``robot`` and ``box`` (payloads attached at their
-    nominal point); the box's intervals are ignored."""
+    nominal point); the box's intervals are ignored. ``sample_period`` [s] is the period the law
+    runs at (``None``: continuous time)."""
     model = robot if box is None else box.nominal_robot(robot)
-    return ComputedTorqueController(model, natural_frequency=natural_frequency, damping=damping)
+    return ComputedTorqueController(
+        model, natural_frequency=natural_frequency, damping=damping, sample_period=sample_period
+    )

@@ -78,7 +78,7 @@ class DelayedIntervalController(IntervalPassivityController):
         self._cache = (t, id(state), torque)
         return torque
 
-    def advance(self, t, q, qd, reference, state, sample_period):
+    def advance(self, t, q, qd, reference, state):
         """``[s_{k+1}, u_k]``: the gain integral advanced on the measured error, and the torque
         of this sample, now in flight."""
         k = self._adaptive_states
@@ -87,7 +87,7 @@ class DelayedIntervalController(IntervalPassivityController):
             torque = cache[2]
         else:
             torque = self.output(t, q, qd, reference, state)
-        adaptive = super().advance(t, q, qd, reference, state[:k], sample_period)
+        adaptive = super().advance(t, q, qd, reference, state[:k])
         return np.concatenate([adaptive, torque])
 
     def state_derivative(self, t, q, qd, reference, state):

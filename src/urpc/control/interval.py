@@ -91,6 +91,7 @@ class IntervalPassivityController(Controller):
     name = "interval"
     #: Samples of actuation delay the law predicts over (:mod:`urpc.control.delay` for 1).
     delay = 0
+    diagnostic_units = {"phi": "N m s/rad", "kappa": "s/rad"}
 
     def __init__(
         self,
@@ -108,6 +109,7 @@ class IntervalPassivityController(Controller):
     ):
         self.bound = bound
         self.robot = bound.robot
+        self.dof = self.robot.dof
         self.epsilon = float(epsilon)
         self.kappa_P, self.kappa_I = float(kappa_P), float(kappa_I)
         self.phi_P, self.phi_I = float(phi_P), float(phi_I)
@@ -239,17 +241,17 @@ class IntervalPassivityController(Controller):
         qd: np.ndarray,
         reference: Reference,
         state: np.ndarray,
-        sample_period: float,
     ) -> np.ndarray:
-        """The state one sample later, ``min(s + T f(||e||), s_max)`` (forward Euler; ``s_max``
-        is where ``phi`` reaches :attr:`phi_max`)."""
+        """The state one sample later, ``min(s + T f(||e||), s_max)`` with ``T`` the
+        :attr:`sample_period` (forward Euler; ``s_max`` is where ``phi`` reaches
+        :attr:`phi_max`)."""
         if not self.adaptive:
             return state
         e = reference.q - q
         norm = math.sqrt(e @ e)
         if norm < self.epsilon or state[0] >= self._s_max:
             return state
-        return np.array([min(state[0] + sample_period * norm, self._s_max)])
+        return np.array([min(state[0] + self.sample_period * norm, self._s_max)])
 
     def diagnostics(self, state: np.ndarray) -> dict[str, float]:
         """``phi`` [N m s/rad] and ``kappa`` [s/rad] at this state."""

@@ -17,7 +17,9 @@ from ..errors import InputError
 from ..model.inertia_bounds import InertiaBounds
 from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
+from ..validation import number_in
 from . import SAMPLED_LAWS
+from .base import sample_period_of
 from .interval import IntervalPassivityController
 
 
@@ -69,16 +71,13 @@ def synthesize(
         InputError: a gain or ``epsilon`` out of range (the message names the field and the valid
             range), an unknown bound method.
     """
-    epsilon = _number("epsilon", epsilon, "a finite number > 0 [rad]", lambda x: x > 0)
-    kappa_P = _number("kappa_P", kappa_P, "a finite number >= 1 (Theorem 1)", lambda x: x >= 1)
-    phi_P = _number("phi_P", phi_P, "a finite number >= 1 (Theorem 1)", lambda x: x >= 1)
-    kappa_I = _number("kappa_I", kappa_I, "a finite number > 0 (Theorem 2)", lambda x: x > 0)
-    phi_I = _number("phi_I", phi_I, "a finite number > 0 (Theorem 2)", lambda x: x > 0)
+    epsilon = number_in("epsilon", epsilon, "a finite number > 0 [rad]", lambda x: x > 0)
+    kappa_P = number_in("kappa_P", kappa_P, "a finite number >= 1 (Theorem 1)", lambda x: x >= 1)
+    phi_P = number_in("phi_P", phi_P, "a finite number >= 1 (Theorem 1)", lambda x: x >= 1)
+    kappa_I = number_in("kappa_I", kappa_I, "a finite number > 0 (Theorem 2)", lambda x: x > 0)
+    phi_I = number_in("phi_I", phi_I, "a finite number > 0 (Theorem 2)", lambda x: x > 0)
     gains = _gain_matrix(Kr, epsilon, robot.dof)
-    if sample_period is not None:
-        sample_period = _number(
-            "sample_period", sample_period, "a finite number > 0 [s] or None", lambda x: x > 0
-        )
+    sample_period = sample_period_of(sample_period)
     if sampled_law not in SAMPLED_LAWS:
         raise InputError(
             f"{sampled_law!r} is not a sampled law; valid: {', '.join(SAMPLED_LAWS)}",
@@ -111,18 +110,6 @@ def synthesize(
         sampled_law=sampled_law,
         inertia_bounds=InertiaBounds(robot, box) if implicit else None,
     )
-
-
-def _number(field: str, value, expected: str, valid) -> float:
-    if isinstance(value, bool | str | bytes):  # float("0.01") would parse text
-        raise InputError(f"{value!r} is not a number; expected {expected}", field=field)
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{value!r} is not a number; expected {expected}", field=field) from None
-    if not math.isfinite(number) or not valid(number):
-        raise InputError(f"{value!r} is out of range; expected {expected}", field=field)
-    return number
 
 
 def _gain_matrix(Kr, epsilon: float, dof: int) -> np.ndarray:

@@ -23,17 +23,19 @@ from pydantic import (
     model_validator,
 )
 
+from .. import names
 from ..errors import did_you_mean
 from .base import FieldError, FileFormat
 from .values import Count, NonNegative, Number, Positive, PositiveCount, Text, Vector
 
-ControllerName = Literal["interval", "r-alpha", "computed-torque"]
-BoundMethodName = Literal["hull", "vertex", "rigorous"]
-PlantBackend = Literal["pinocchio", "mujoco"]
-TrajectoryKind = Literal["paper", "sinusoid", "quintic", "file", "waypoints"]
+# The fixed sets, from the one place that names them (urpc.names).
+ControllerName = Literal[names.CONTROLLERS]
+BoundMethodName = Literal[names.BOUND_METHODS]
+PlantBackend = Literal[names.PLANT_BACKENDS]
+TrajectoryKind = Literal[names.TRAJECTORY_KINDS]
 #: How a sampled interval controller runs: ``implicit`` (the sampled-data law) or ``paper`` (the
 #: paper's law unchanged).
-SampledLaw = Literal["implicit", "paper"]
+SampledLaw = Literal[names.SAMPLED_LAWS]
 
 
 def _form(value: Any) -> str:

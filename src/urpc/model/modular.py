@@ -18,13 +18,14 @@ import re
 import shutil
 import tempfile
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from ..atomic import replace_file
 from ..errors import InputError, did_you_mean
 from ..formats.assembly import AssemblyFile
 from ..formats.base import read_yaml, validate
@@ -198,8 +199,8 @@ def _assemble(
     folder.mkdir(parents=True, exist_ok=True)
     urdf_path = folder / f"{name}.urdf"
     uncertainty_path = folder / f"{name}.uncertainty.yaml"
-    _write_replacing(urdf_path, lambda path: urdf.write_xml_file(str(path)))
-    _write_replacing(
+    replace_file(urdf_path, lambda path: urdf.write_xml_file(str(path)))
+    replace_file(
         uncertainty_path,
         lambda path: path.write_text(
             yaml.dump(document, Dumper=_Dumper, sort_keys=False, default_flow_style=None)
@@ -294,18 +295,6 @@ except AttributeError:  # pragma: no cover - PyYAML built without libyaml
     _Dumper = yaml.SafeDumper
 
 _TEMPORARY: list[tuple[int, str]] = []
-
-
-def _write_replacing(path: Path, write: Callable[[Path], Any]) -> None:
-    """Write a file through a temporary name and an atomic rename: a reader never sees a
-    half-written file (and replacing is faster than truncating an existing file)."""
-    partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
-    try:
-        write(partial)
-        os.replace(partial, path)
-    except OSError as exc:
-        partial.unlink(missing_ok=True)
-        raise InputError(f"cannot write the file ({exc})", source=path) from None
 
 
 def _temporary_folder() -> Path:

@@ -87,7 +87,7 @@ class ControlLoop:
         controller, state = self.controller, self.state
         reference = self.trajectory.reference(t)
         tau = controller.output(t, q, qd, reference, state)
-        self.state = controller.advance(t, q, qd, reference, state, self.period)
+        self.state = controller.advance(t, q, qd, reference, state)
         k = self.samples
         if k == self._capacity:
             self._grow()

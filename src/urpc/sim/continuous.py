@@ -27,7 +27,7 @@ CONTINUOUS_ATOL = 1e-10
 
 def run_continuous(
     setup: RunSetup, method: str, rtol: float, atol: float, output_rate: float
-) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+) -> tuple[dict[str, Any], dict[str, Any]]:
     """The series (keyword arguments of :class:`~urpc.sim.results.SimulationResult`) and the
     ``info`` of a continuous-time run recorded at ``output_rate`` [Hz]."""
     plant, controller, trajectory = setup.plant, setup.controller, setup.trajectory
@@ -97,17 +97,17 @@ def run_continuous(
     q, qd, states = solution.y[:n].T, solution.y[n : 2 * n].T, solution.y[2 * n :].T
     qdes, qddes = np.empty((samples, n)), np.empty((samples, n))
     torque = np.empty((samples, n))
-    phi, kappa = np.full(samples, np.nan), np.full(samples, np.nan)
-    has_gains = bool(controller.diagnostics(controller.initial_state()))
+    names = tuple(controller.diagnostic_units)
+    logged = np.full((samples, len(names)), np.nan)
     for k, t in enumerate(solution.t):
         reference = trajectory.reference(t)
         qdes[k], qddes[k] = reference.q, reference.qd
         torque[k] = controller.output(t, q[k], qd[k], reference, states[k])
         if not np.isfinite(torque[k]).all():  # re-evaluated on the output grid: check again
             diverged(t, q[k], qd[k], "the controller output a non-finite torque")
-        if has_gains:
-            gains = controller.diagnostics(states[k])
-            phi[k], kappa[k] = gains.get("phi", np.nan), gains.get("kappa", np.nan)
+        if names:
+            named = controller.diagnostics(states[k])
+            logged[k] = [named.get(name, np.nan) for name in names]
     saturated = (
         np.zeros(samples, dtype=bool) if limit is None else np.any(np.abs(torque) > limit, axis=1)
     )
@@ -119,8 +119,7 @@ def run_continuous(
         qd_desired=qddes,
         torque=torque,
         disturbance=np.zeros((samples, n)),
-        phi=phi,
-        kappa=kappa,
+        diagnostics={name: logged[:, i] for i, name in enumerate(names)},
         saturated=saturated,
         step_time_median=float(np.median(step_times)),
     )

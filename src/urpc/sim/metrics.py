@@ -24,8 +24,8 @@ output grid of a continuous one), ``T = t_K - t_0`` and ``e_k = q_d(t_k) - q(t_k
     ``sum_{k=1..K} ||u_k - u_{k-1}||_1 / T``: the total variation of the commanded torque per
     second, the chattering index. It depends on the recording grid for non-smooth torques, so
     compare runs recorded at the same rate.
-``phi`` [N m s/rad], ``kappa`` [s/rad]
-    The final gains (``None`` for controllers without them).
+one key per diagnostic series of the controller (e.g. ``phi`` [N m s/rad], ``kappa`` [s/rad])
+    Its final value (``None`` when NaN); a controller without diagnostics adds no key.
 ``step_time_median`` [s]
     Median wall time of one control step (one torque evaluation and state update).
 ``wall_time`` [s]
@@ -35,11 +35,15 @@ output grid of a continuous one), ``T = t_K - t_0`` and ``e_k = q_d(t_k) - q(t_k
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-#: The metric names, in report order (also the keys of ``SimulationResult.metrics``).
+from ..jsonsafe import finite_or_none
+
+#: The metric names every run has, in report order (the keys of ``SimulationResult.metrics``
+#: besides the final value of each of the controller's diagnostic series).
 METRIC_NAMES = (
     "entry_time",
     "met",
@@ -48,8 +52,6 @@ METRIC_NAMES = (
     "torque_rms",
     "torque_peak",
     "torque_variation",
-    "phi",
-    "kappa",
     "step_time_median",
     "wall_time",
 )
@@ -79,14 +81,14 @@ def series_metrics(
     torque: np.ndarray,
     epsilon: float,
     *,
-    phi: np.ndarray | None = None,
-    kappa: np.ndarray | None = None,
+    diagnostics: Mapping[str, np.ndarray] | None = None,
     step_time_median: float | None = None,
     wall_time: float | None = None,
 ) -> dict[str, Any]:
     """The metrics from raw series: times ``t`` [s] (``K+1``), ``error_norm`` [rad] (``K+1``),
-    commanded ``torque`` [N m] (``(K+1) x dof``), the precision ``epsilon`` [rad]; ``phi`` and
-    ``kappa`` series whose last value is reported (``None`` or all-NaN: not applicable)."""
+    commanded ``torque`` [N m] (``(K+1) x dof``), the precision ``epsilon`` [rad]; the named
+    ``diagnostics`` series, whose last value is reported under each name (after
+    ``torque_variation``)."""
     t = np.asarray(t, dtype=float)
     error_norm = np.asarray(error_norm, dtype=float)
     torque = np.asarray(torque, dtype=float).reshape(len(t), -1)
@@ -111,19 +113,13 @@ def series_metrics(
         "torque_rms": float(math.sqrt(np.mean(np.sum(torque**2, axis=1)))),
         "torque_peak": float(np.abs(torque).max()),
         "torque_variation": float(differences / span) if span > 0 else 0.0,
-        "phi": _final(phi),
-        "kappa": _final(kappa),
-        "step_time_median": _optional(step_time_median),
-        "wall_time": _optional(wall_time),
+        **{name: _final(series) for name, series in (diagnostics or {}).items()},
+        "step_time_median": finite_or_none(step_time_median),
+        "wall_time": finite_or_none(wall_time),
     }
 
 
 def _final(series: np.ndarray | None) -> float | None:
     if series is None or len(series) == 0:
         return None
-    value = float(np.asarray(series, dtype=float)[-1])
-    return None if math.isnan(value) else value
-
-
-def _optional(value: float | None) -> float | None:
-    return None if value is None or math.isnan(value) else float(value)
+    return finite_or_none(np.asarray(series, dtype=float)[-1])

@@ -8,7 +8,8 @@ headless (no display, no global figure registry); save it with ``figure.savefig(
 * :func:`plot_error` - ``||e||`` on a log scale with the ``epsilon`` line (Figs. 2, 3), above
   ``||e|| / epsilon`` on a linear scale with the final window's maximum (the margin to epsilon);
 * :func:`plot_torque` - the commanded joint torques, one panel per joint (Figs. 2-5);
-* :func:`plot_gains` - the adaptive gains ``phi`` and ``kappa`` over time;
+* :func:`plot_gains` - the controller's diagnostic series (the adaptive gains ``phi`` and
+  ``kappa`` of the interval law) over time;
 * :func:`plot_overview` - error and torques of one run stacked (Figs. 2, 3);
 * :func:`plot_errors` - error norms of several runs overlaid, with ``epsilon`` (e.g. both
   initial conditions of one scenario);
@@ -20,7 +21,7 @@ is one), so that this module depends on no result class and the result class can
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any, Protocol
 
 import numpy as np
@@ -44,8 +45,8 @@ class Run(Protocol):
     sample_period: float | None  # [s], None for continuous time
     scenario: str
     disturbance_bound: float  # [N m]
-    phi: np.ndarray  # [N m s/rad], (K,), NaN for controllers without adaptive gains
-    kappa: np.ndarray  # [s/rad], (K,)
+    diagnostics: Mapping[str, np.ndarray]  # name -> (K,), the controller's diagnostic series
+    info: dict[str, Any]  # "diagnostic_units": name -> unit
 
     @property
     def dof(self) -> int: ...
@@ -138,20 +139,29 @@ def plot_torque(result: Run) -> Figure:
 
 
 def plot_gains(result: Run) -> Figure:
-    """The adaptive gains over time: ``phi(t)`` [N m s/rad], which scales the damping of the
-    sliding variable, and ``kappa(t)`` [s/rad], which scales the robust term; both grow while
-    ``||e|| >= epsilon`` and freeze inside the ball. A controller without adaptive gains (NaN
-    series) gets a note instead of curves."""
+    """The controller's diagnostic series over time, one panel each (the interval law's
+    adaptive gains ``phi(t)`` [N m s/rad], which scales the damping of the sliding variable, and
+    ``kappa(t)`` [s/rad], which scales the robust term; both grow while ``||e|| >= epsilon`` and
+    freeze inside the ball). A controller without diagnostics gets a note instead of curves."""
+    diagnostics = dict(result.diagnostics)
+    units = result.info.get("diagnostic_units", {})
     figure = Figure(figsize=(7.0, 4.6), layout="constrained")
-    top, bottom = figure.subplots(2, 1, sharex=True)
-    phi = np.asarray(result.phi, dtype=float)
-    kappa = np.asarray(result.kappa, dtype=float)
-    for ax, series, name, unit, color in (
-        (top, phi, "\\phi", "N m s/rad", "tab:blue"),
-        (bottom, kappa, "\\kappa", "s/rad", "tab:purple"),
-    ):
+    axes = np.atleast_1d(figure.subplots(max(1, len(diagnostics)), 1, sharex=True))
+    if not diagnostics:
+        axes[0].text(
+            0.5,
+            0.5,
+            f"no diagnostic series ({result.controller} controller)",
+            ha="center",
+            va="center",
+            transform=axes[0].transAxes,
+        )
+    for k, (ax, (name, series)) in enumerate(zip(axes, diagnostics.items(), strict=False)):
+        series = np.asarray(series, dtype=float)
+        unit = units.get(name, "")
+        label = f"$\\{name}$" if name in _GREEK else name
         if series.size and np.isfinite(series).any():
-            ax.plot(result.t, series, lw=1.0, color=color)
+            ax.plot(result.t, series, lw=1.0, color=_GAIN_COLORS[k % len(_GAIN_COLORS)])
             final = float(series[np.isfinite(series)][-1])
             ax.annotate(
                 f"final {final:.4g} {unit}",
@@ -163,28 +173,21 @@ def plot_gains(result: Run) -> Figure:
                 va="top",
                 fontsize="small",
             )
-        else:
-            ax.text(
-                0.5,
-                0.5,
-                f"no adaptive ${name}$ ({result.controller} controller)",
-                ha="center",
-                va="center",
-                transform=ax.transAxes,
-            )
-        ax.set_ylabel(f"${name}$ [{unit}]")
+        ax.set_ylabel(f"{label} [{unit}]" if unit else label)
         ax.ticklabel_format(axis="y", useOffset=False)  # 2.0008, not "+2" and 0.0008
         ax.grid(True, alpha=0.3)
     entry = result.metrics["entry_time"]
     if entry is not None:
-        for ax in (top, bottom):
+        for ax in axes:
             ax.axvline(entry, color="tab:green", ls=":", lw=1.0)
-    bottom.set_xlabel("time [s]")
-    figure.suptitle(
-        f"Adaptive gains (they grow while $\\|e\\| \\geq \\varepsilon$)\n{describe(result)}",
-        fontsize=_TITLE_SIZE,
-    )
+    axes[-1].set_xlabel("time [s]")
+    figure.suptitle(f"Controller diagnostics\n{describe(result)}", fontsize=_TITLE_SIZE)
     return figure
+
+
+#: Diagnostic names drawn as Greek letters, and the colors of successive panels.
+_GREEK = ("phi", "kappa", "rho", "eta", "alpha", "beta")
+_GAIN_COLORS = ("tab:blue", "tab:purple", "tab:orange", "tab:green")
 
 
 def plot_overview(result: Run) -> Figure:

@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
 from functools import cached_property
@@ -20,14 +18,17 @@ from typing import Any
 
 import numpy as np
 
+from ..atomic import write_files
 from ..errors import InputError
-from .metrics import METRIC_NAMES, series_metrics
+from ..jsonsafe import finite_or_none
+from .metrics import series_metrics
 
 #: File names written by :meth:`SimulationResult.save`.
 NPZ_NAME, CSV_NAME, SUMMARY_NAME = "result.npz", "result.csv", "summary.json"
 
-_SERIES = ("t", "q", "qd", "q_desired", "qd_desired", "torque", "disturbance", "phi", "kappa")
-_SERIES_OPTIONAL = ("saturated",)
+_SERIES = ("t", "q", "qd", "q_desired", "qd_desired", "torque", "disturbance", "saturated")
+#: Prefix of a diagnostic series in ``result.npz`` (``diagnostic.phi``).
+_DIAGNOSTIC = "diagnostic."
 
 
 @dataclass(frozen=True, eq=False)
@@ -43,9 +44,10 @@ class SimulationResult:
         torque: Commanded torque ``u`` [N m] (the controller's output, before any torque limit),
             ``(K, n)``; held over the following sample period in a sampled run.
         disturbance: Input disturbance ``d`` [N m] added at the plant input, ``(K, n)``.
-        phi, kappa: The controller's gains [N m s/rad], [s/rad], ``(K,)``, NaN when the
-            controller has none.
         saturated: True where the torque limit clipped the command, ``(K,)``.
+        diagnostics: The controller's named diagnostic series (``Controller.diagnostics``),
+            name -> ``(K,)``, e.g. the interval law's gains ``phi`` [N m s/rad] and ``kappa``
+            [s/rad]; their units are ``info["diagnostic_units"]``. Empty for a law with none.
         controller: Controller name.
         epsilon: Required precision [rad] the run is judged against.
         duration: Simulated time [s].
@@ -67,8 +69,6 @@ class SimulationResult:
     qd_desired: np.ndarray
     torque: np.ndarray
     disturbance: np.ndarray
-    phi: np.ndarray
-    kappa: np.ndarray
     saturated: np.ndarray
     controller: str
     epsilon: float
@@ -79,6 +79,7 @@ class SimulationResult:
     plant: str = ""
     disturbance_bound: float = 0.0
     torque_limit: tuple[float, ...] | None = None
+    diagnostics: Mapping[str, np.ndarray] = field(default_factory=dict)
     step_time_median: float = math.nan
     wall_time: float = math.nan
     info: dict[str, Any] = field(default_factory=dict)
@@ -105,23 +106,21 @@ class SimulationResult:
 
     @cached_property
     def metrics(self) -> dict[str, Any]:
-        """The run's metrics, keys :data:`urpc.sim.metrics.METRIC_NAMES` (see :mod:`urpc.sim.metrics`)."""
+        """The run's metrics, keys :data:`urpc.sim.metrics.METRIC_NAMES` and the final value of
+        each diagnostic series (see :mod:`urpc.sim.metrics`)."""
         return series_metrics(
             self.t,
             self.error_norm,
             self.torque,
             self.epsilon,
-            phi=self.phi,
-            kappa=self.kappa,
+            diagnostics=self.diagnostics,
             step_time_median=self.step_time_median,
             wall_time=self.wall_time,
         )
 
     def summary(self) -> dict[str, Any]:
         """The metrics plus ``epsilon`` and ``controller`` (the content of ``summary.json``)."""
-        metrics = self.metrics
-        summary = {name: metrics[name] for name in METRIC_NAMES}
-        return {**summary, "epsilon": float(self.epsilon), "controller": self.controller}
+        return {**self.metrics, "epsilon": float(self.epsilon), "controller": self.controller}
 
     def __repr__(self) -> str:
         timing = "continuous" if self.sample_period is None else f"T={self.sample_period:g} s"
@@ -134,7 +133,7 @@ class SimulationResult:
     def save(self, directory: str | Path, *, csv: bool = True) -> Path:
         """Write ``result.npz`` (every series and the metadata), ``result.csv`` (unless ``csv`` is
         false: a 10 kHz, 10 s run makes a ~7 MB table) and ``summary.json`` into ``directory``
-        (created with its parents if missing), atomically (:func:`write_files`).
+        (created with its parents if missing), atomically (:func:`urpc.atomic.write_files`).
 
         Returns:
             The directory.
@@ -142,7 +141,8 @@ class SimulationResult:
         return write_files(directory, self.writers(csv=csv))
 
     def writers(self, *, csv: bool = True) -> dict[str, Callable[[Path], None]]:
-        """File name -> function writing that file, for :meth:`save` and :func:`write_files`."""
+        """File name -> function writing that file, for :meth:`save` and
+        :func:`urpc.atomic.write_files`."""
         writers = {NPZ_NAME: self._write_npz, CSV_NAME: self._write_csv}
         if not csv:
             del writers[CSV_NAME]
@@ -165,6 +165,11 @@ class SimulationResult:
                 metadata = json.loads(str(archive["metadata"]))
         except (KeyError, ValueError, OSError) as exc:
             raise InputError(f"not a urpc result file ({exc})", path) from None
+        series["diagnostics"] = {
+            name[len(_DIAGNOSTIC) :]: series.pop(name)
+            for name in list(series)
+            if name.startswith(_DIAGNOSTIC)
+        }
         if metadata.get("torque_limit") is not None:
             metadata["torque_limit"] = tuple(metadata["torque_limit"])
         known = {f.name for f in fields(cls)}
@@ -184,13 +189,15 @@ class SimulationResult:
             "plant": self.plant,
             "disturbance_bound": float(self.disturbance_bound),
             "torque_limit": None if self.torque_limit is None else list(self.torque_limit),
-            "step_time_median": _json_float(self.step_time_median),
-            "wall_time": _json_float(self.wall_time),
+            "step_time_median": finite_or_none(self.step_time_median),
+            "wall_time": finite_or_none(self.wall_time),
             "info": self.info,
         }
 
     def _write_npz(self, path: Path) -> None:
-        arrays = {name: np.asarray(getattr(self, name)) for name in _SERIES + _SERIES_OPTIONAL}
+        arrays = {name: np.asarray(getattr(self, name)) for name in _SERIES}
+        for name, series in self.diagnostics.items():
+            arrays[_DIAGNOSTIC + name] = np.asarray(series)
         arrays["error"] = self.error
         arrays["error_norm"] = self.error_norm
         arrays["metadata"] = np.array(json.dumps(self._metadata()))
@@ -216,8 +223,9 @@ class SimulationResult:
         for prefix, data in (("u", self.torque), ("d", self.disturbance)):
             columns += [f"{prefix}_{j}" for j in joints]
             blocks.append(data)
-        columns += ["phi", "kappa"]
-        blocks += [self.phi[:, None], self.kappa[:, None]]
+        for name, series in self.diagnostics.items():
+            columns.append(name)
+            blocks.append(np.asarray(series, dtype=float)[:, None])
         table = np.hstack(blocks)
         with path.open("w") as stream:
             np.savetxt(
@@ -287,122 +295,3 @@ class SimulationResult:
                 source=recorded["urdf"],
             )
         return load_robot(recorded["urdf"], recorded.get("locked_joints") or {})
-
-
-def check_writable(directory: str | Path) -> Path:
-    """Check that ``directory`` can be written, leaving nothing behind: an existing folder
-    receives (and loses at once) a probe file, a missing one is created with its missing parents
-    and removed again. Trying is the only test that holds everywhere (``os.access`` says yes to
-    root in ``/proc`` or on a read-only mount). Returns the folder as an absolute path. Every
-    command that writes files calls it before any work starts.
-
-    Raises:
-        InputError: naming the folder that is in the way and why.
-    """
-    directory = Path(directory).expanduser().absolute()
-    if directory.exists() and not directory.is_dir():
-        raise InputError(
-            "exists and is not a folder; give a folder for the outputs", source=directory
-        )
-    target = directory
-    while not target.exists():
-        target = target.parent
-    if not target.is_dir():
-        raise InputError(
-            f"cannot create the output folder: '{target}' is not a writable folder; choose "
-            "another --out",
-            source=directory,
-        )
-    try:
-        if directory.exists():
-            handle, probe = tempfile.mkstemp(prefix=".urpc-probe-", dir=directory)
-            os.close(handle)
-            os.unlink(probe)
-        else:
-            created: list[Path] = []
-            try:
-                _make_folders(directory, created)
-            finally:
-                for folder in reversed(created):
-                    folder.rmdir()
-    except OSError as exc:
-        reason = exc.strerror or type(exc).__name__
-        raise InputError(
-            f"cannot write the output folder ({reason}); choose another --out", source=directory
-        ) from None
-    return directory
-
-
-#: Marker of a file being written by :func:`write_files`: ``NAME.partial.EXT`` (the extension
-#: kept for writers that infer the format from it) takes the name ``NAME.EXT`` when complete.
-PARTIAL_SUFFIX = ".partial"
-
-
-def partial_path(final: Path) -> Path:
-    """Where :func:`write_files` writes ``final`` until it is complete."""
-    return final.with_name(f"{final.stem}{PARTIAL_SUFFIX}{final.suffix}")
-
-
-def write_files(directory: str | Path, writers: Mapping[str, Callable[[Path], None]]) -> Path:
-    """Write a set of files into ``directory`` so that a failure leaves no partial file behind.
-
-    ``writers`` maps a relative file name (``"summary.json"``, ``"runs/s1/result.npz"``) to a
-    function that writes that file at the path it is given. Every file is first written under its
-    partial name (:func:`partial_path`, ``summary.partial.json``) in its final folder; only when all are written do they
-    take their final names (``os.replace``; other files in ``directory`` are kept). An exception
-    removes the partial files and the folders this call created; a process killed while writing
-    leaves visible ``*.partial.*`` files inside ``directory`` (replaced by the next write), never a
-    hidden scratch folder beside it. Folders and files follow the umask.
-
-    Returns:
-        The directory.
-
-    Raises:
-        InputError: ``directory`` is not a path, is a file, or cannot be created (a file in the
-            way, a read-only folder) (:func:`check_writable`).
-    """
-    if not isinstance(directory, str | Path):
-        raise InputError(
-            f"expected a directory path (str or Path), got {type(directory).__name__}",
-            field="directory",
-        )
-    check_writable(directory)  # a file in the way is an InputError, not NotADirectoryError
-    directory = Path(directory)
-    created: list[Path] = []
-    staged: list[tuple[Path, Path]] = []
-    try:
-        _make_folders(directory, created)
-        for name, write in writers.items():
-            final = directory / name
-            _make_folders(final.parent, created)
-            partial = partial_path(final)
-            staged.append((partial, final))
-            write(partial)
-        for partial, final in staged:
-            os.replace(partial, final)
-    except BaseException:
-        for partial, _ in staged:
-            partial.unlink(missing_ok=True)
-        for folder in reversed(created):
-            try:
-                folder.rmdir()
-            except OSError:
-                pass
-        raise
-    return directory
-
-
-def _make_folders(folder: Path, created: list[Path]) -> None:
-    """Create ``folder`` and its missing parents (mode 0o777 less the umask), appending each
-    folder created to ``created``, parents first."""
-    missing = []
-    while not folder.exists():
-        missing.append(folder)
-        folder = folder.parent
-    for path in reversed(missing):
-        path.mkdir(exist_ok=True)
-        created.append(path)
-
-
-def _json_float(value: float) -> float | None:
-    return None if value is None or math.isnan(value) else float(value)

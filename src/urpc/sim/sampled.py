@@ -26,15 +26,16 @@ DISTURBANCES = ("ball", "against", "worst")
 def run_sampled(
     setup: RunSetup,
     stepper: Plant,
-    period: float,
     disturbance_bound: float,
     seed: int,
     disturbance_model: str = "ball",
-) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+) -> tuple[dict[str, Any], dict[str, Any]]:
     """The series (keyword arguments of :class:`~urpc.sim.results.SimulationResult`) and the
-    ``info`` of a run sampled with period ``period`` [s] on ``stepper``, with the disturbance
-    ``disturbance_model`` (one of :data:`DISTURBANCES`) of magnitude ``disturbance_bound`` [N m]."""
+    ``info`` of a run sampled at the controller's own period (``controller.sample_period`` [s])
+    on ``stepper``, with the disturbance ``disturbance_model`` (one of :data:`DISTURBANCES`) of
+    magnitude ``disturbance_bound`` [N m]."""
     controller, trajectory = setup.controller, setup.trajectory
+    period = controller.sample_period
     q, qd, limit, bar = setup.q0, setup.qd0, setup.limit, setup.bar
     n = stepper.dof
     n_periods = max(1, math.ceil(setup.duration / period - 1e-9))
@@ -45,7 +46,7 @@ def run_sampled(
         disturbance = ball_samples(samples, n, disturbance_bound, np.random.default_rng(seed))
     elif disturbance_model in ("against", "worst"):
         disturbance = np.zeros((samples, n))  # filled sample by sample
-        Kr = np.broadcast_to(np.asarray(getattr(controller, "Kr", 1.0), dtype=float), (n,))
+        Kr = np.broadcast_to(np.asarray(controller.Kr, dtype=float), (n,))
     else:
         raise ValueError(f"unknown disturbance model {disturbance_model!r}; valid: {DISTURBANCES}")
     stepper.reset(q, qd)
@@ -58,12 +59,12 @@ def run_sampled(
     q_series, qd_series = np.empty((samples, n)), np.empty((samples, n))
     qdes_series, qddes_series = np.empty((samples, n)), np.empty((samples, n))
     torque = np.empty((samples, n))
-    phi, kappa = np.full(samples, np.nan), np.full(samples, np.nan)
+    names = tuple(controller.diagnostic_units)
+    logged = np.full((samples, len(names)), np.nan)
     saturated = np.zeros(samples, dtype=bool)
     step_times = np.empty(samples)
     state = setup.state0
-    has_gains = bool(controller.diagnostics(state))
-    gains_of, gains = None, (np.nan, np.nan)
+    logged_of, values = None, np.full(len(names), np.nan)
     report_every = max(1, samples // 200)
     bound = setup.max_state**2
     clock = time.perf_counter
@@ -72,7 +73,7 @@ def run_sampled(
         reference = trajectory.reference(t)
         tic = clock()
         u = controller.output(t, q, qd, reference, state)
-        next_state = controller.advance(t, q, qd, reference, state, period)
+        next_state = controller.advance(t, q, qd, reference, state)
         step_times[k] = clock() - tic
         # Before the torque limit (which would clip an inf to the limit) and at every sample,
         # the last one included: a controller never hands out a non-finite torque silently.
@@ -86,11 +87,11 @@ def run_sampled(
                 reference.q - q, reference.qd - qd, Kr, disturbance_bound,
                 setup.plant.M(q) if worst else None,
             )  # fmt: skip
-        if has_gains:
-            if state is not gains_of:  # advance() returns the same array while nothing changes
+        if names:
+            if state is not logged_of:  # advance() returns the same array while nothing changes
                 named = controller.diagnostics(state)
-                gains_of, gains = state, (named.get("phi", np.nan), named.get("kappa", np.nan))
-            phi[k], kappa[k] = gains
+                logged_of, values = state, [named.get(name, np.nan) for name in names]
+            logged[k] = values
         if k == n_periods:
             break
         if limit is not None:
@@ -118,8 +119,7 @@ def run_sampled(
         qd_desired=qddes_series,
         torque=torque,
         disturbance=disturbance,
-        phi=phi,
-        kappa=kappa,
+        diagnostics={name: logged[:, i] for i, name in enumerate(names)},
         saturated=saturated,
         step_time_median=float(np.median(step_times)),
     )

@@ -4,6 +4,10 @@ The plant is a :class:`~urpc.model.robot.Robot` carrying the *true* parameters; 
 from Pinocchio's articulated-body algorithm. The plant sees ``sat(u) + d``: the controller's torque
 ``u``, clipped to the optional per-joint ``torque_limit``, plus an input disturbance ``d``.
 
+The controller owns its period: a controller synthesized with ``sample_period=T``
+(``controller.sample_period``) runs sampled at ``T``, one without (``None``) in continuous time;
+the period is never given a second time here.
+
 * **Continuous time** (``sample_period=None``, the paper's scenario 1): the plant state and the
   controller's internal state form one ODE, integrated by :func:`scipy.integrate.solve_ivp` with
   tight tolerances; series are recorded on a fixed output grid (``output_rate``, default 1 kHz)
@@ -26,7 +30,6 @@ from __future__ import annotations
 
 import math
 import time
-import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -53,7 +56,6 @@ def simulate(
     duration: float,
     q0: np.ndarray | None = None,
     qd0: np.ndarray | None = None,
-    sample_period: float | None = None,
     disturbance_bound: float = 0.0,
     disturbance: str = "ball",
     seed: int = 0,
@@ -75,17 +77,18 @@ def simulate(
 
     Args:
         plant: The true plant (a robot with the true parameters).
-        controller: The control law (built once, reusable: its state is explicit).
+        controller: The control law (built once, reusable: its state is explicit). It runs at
+            its own period ``controller.sample_period`` [s] (zero-order hold), or in continuous
+            time when that is ``None``.
         trajectory: Object with ``reference(t) -> Reference``.
         duration: Simulated time [s] (a sampled run is rounded up to whole periods).
         q0, qd0: Initial joint positions [rad] and velocities [rad/s]; ``None`` starts on the
             reference at ``t = 0``.
-        sample_period: Control period [s] (zero-order hold); ``None`` for continuous time.
         disturbance_bound: Radius [N m] of the ball the input disturbance is drawn from, once per
             sample (sampled runs only).
         disturbance: ``"ball"`` (``d_k`` drawn uniformly in that ball) or ``"against"``
             (``d_k = -disturbance_bound r_k / ||r_k||``, constant magnitude against the sliding
-            variable ``r = (qd_d - qd) + Kr (q_d - q)``, ``Kr`` the controller's or 1).
+            variable ``r = (qd_d - qd) + Kr (q_d - q)``, ``Kr`` the controller's).
         seed: Seed of the disturbance generator (``numpy.random.default_rng``).
         torque_limit: Per-joint bound [N m] (scalar or ``dof`` values) the command is clipped to;
             ``None`` for no limit.
@@ -119,8 +122,9 @@ def simulate(
     q0 = finite_vector("q0", reference0.q if q0 is None else q0, n)
     qd0 = finite_vector("qd0", reference0.qd if qd0 is None else qd0, n)
     duration = positive_number("duration", duration, "a finite number > 0 [s]")
+    sample_period = controller.sample_period
     if epsilon is None:
-        epsilon = getattr(controller, "epsilon", None)
+        epsilon = controller.epsilon
         if epsilon is None:
             raise InputError(
                 f"controller '{controller.name}' has no epsilon; pass the required precision",
@@ -152,8 +156,8 @@ def simulate(
         )
     if sample_period is None and plant_backend != "pinocchio":
         raise InputError(
-            f"the {plant_backend} plant steps under a held torque: give a sample_period, or use "
-            "the pinocchio plant for continuous time",
+            f"the {plant_backend} plant steps under a held torque: synthesize the controller "
+            "with a sample_period, or use the pinocchio plant for continuous time",
             field="plant",
         )
     state0 = controller.initial_state()
@@ -176,26 +180,23 @@ def simulate(
         if sample_period is None:
             if disturbance_bound > 0:
                 raise InputError(
-                    "an input disturbance is drawn once per control sample; give a sample_period "
-                    "or set disturbance_bound to 0 for continuous time",
+                    "an input disturbance is drawn once per control sample; synthesize the "
+                    "controller with a sample_period or set disturbance_bound to 0 for "
+                    "continuous time",
                     field="disturbance_bound",
                 )
             rate = positive_number("output_rate", output_rate, "a finite number > 0 [Hz]")
-            _check_period(controller, None)
             series, info = run_continuous(setup, method, rtol, atol, rate)
         else:
-            period = positive_number("sample_period", sample_period, "a finite number > 0 [s]")
-            _check_period(controller, period)
-            if period > duration:
+            if sample_period > duration:
                 raise InputError(
-                    f"{period!r} s is longer than the duration {duration!r} s",
+                    f"the controller's period {sample_period!r} s is longer than the duration "
+                    f"{duration!r} s",
                     field="sample_period",
                 )
             step = positive_number("integration_step", integration_step, "a finite number > 0 [s]")
             stepper = make_plant(plant_backend, plant, max_step=step)
-            series, info = run_sampled(
-                setup, stepper, period, disturbance_bound, int(seed), disturbance
-            )
+            series, info = run_sampled(setup, stepper, disturbance_bound, int(seed), disturbance)
             duration = float(series["t"][-1])
     finally:
         bar.close()
@@ -205,6 +206,8 @@ def simulate(
         "urdf": str(plant.urdf_path),
         "locked_joints": dict(plant.locked_joints),
     }
+    if controller.diagnostic_units:
+        info["diagnostic_units"] = dict(controller.diagnostic_units)
     return SimulationResult(
         **series,
         **common,
@@ -213,10 +216,6 @@ def simulate(
         wall_time=time.perf_counter() - start,
         info=info,
     )
-
-
-class SamplePeriodWarning(UserWarning):
-    """A controller simulated at another period than the one it was synthesized for."""
 
 
 def _check_parts(plant: Any, controller: Any, trajectory: Any) -> None:
@@ -254,30 +253,12 @@ def _check_parts(plant: Any, controller: Any, trajectory: Any) -> None:
             f"{trajectory!r} has {dof} joints, the plant {plant.name!r} has {plant.dof}{hint}",
             field="trajectory",
         )
-    controlled = getattr(getattr(controller, "robot", None), "dof", plant.dof)
-    if controlled != plant.dof:
+    if controller.dof is not None and controller.dof != plant.dof:
         raise InputError(
-            f"controller {controller.name!r} was built for {controlled} joints, the plant "
+            f"controller {controller.name!r} was built for {controller.dof} joints, the plant "
             f"{plant.name!r} has {plant.dof}",
             field="controller",
         )
-
-
-def _check_period(controller: Controller, period: float | None) -> None:
-    """A :class:`SamplePeriodWarning` when ``controller`` was synthesized for a period
-    (``controller.sample_period`` [s]) and runs at another one (``None``: continuous time)."""
-    synthesized = getattr(controller, "sample_period", None)
-    if synthesized is None or (period is not None and math.isclose(period, synthesized)):
-        return
-    running = "in continuous time" if period is None else f"at {period:g} s"
-    warnings.warn(
-        SamplePeriodWarning(
-            f"controller {controller.name!r} was synthesized for a sample period of "
-            f"{synthesized:g} s and is simulated {running}: its sampled law and any certificate "
-            f"hold at {synthesized:g} s only; synthesize it with sample_period={period!r}"
-        ),
-        stacklevel=3,
-    )
 
 
 def describe_plant(plant: Robot) -> str:

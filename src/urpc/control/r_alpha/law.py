@@ -11,7 +11,8 @@ import numpy as np
 from ...errors import InputError
 from ...model.robot import Robot
 from ...model.uncertainty import ParameterBox
-from ..base import Controller, Reference
+from ...validation import positive_number
+from ..base import Controller, Reference, sample_period_of
 from .betas import Betas, estimate_betas
 
 
@@ -76,6 +77,8 @@ class RAlphaController(Controller):
         Lambda: Error-to-velocity gain [1/s]: a scalar (times I), a diagonal or a matrix; default I.
         Q: Damping gain [N m s/rad], same forms; default 35 I (the paper's).
         eta: Smoothing parameter [N m rad/s]; default 7e-5 (the paper's).
+        sample_period: Control period [s] the law runs at under a zero-order hold; ``None``
+            (default): continuous time.
 
     Raises:
         InputError: a gain of the wrong shape, not symmetric positive definite, or a
@@ -94,10 +97,10 @@ class RAlphaController(Controller):
         Lambda: float | np.ndarray | None = None,
         Q: float | np.ndarray | None = None,
         eta: float = 7e-5,
+        sample_period: float | None = None,
     ):
         for label, value in (("r", r), ("alpha", alpha), ("eta", eta)):
-            if not np.isfinite(value) or value <= 0:
-                raise InputError(f"{label}={value} must be a finite number > 0", field=label)
+            positive_number(label, value, "a finite number > 0")
         self.betas = betas
         self.dof = int(dof)
         self.r = float(r)
@@ -105,6 +108,7 @@ class RAlphaController(Controller):
         self.Lambda = gain_matrix(1.0 if Lambda is None else Lambda, self.dof, "Lambda")
         self.Q = gain_matrix(35.0 if Q is None else Q, self.dof, "Q")
         self.eta = float(eta)
+        self.sample_period = sample_period_of(sample_period)
 
     def design_conditions(self) -> DesignConditions:
         """The three design conditions with their values (``.hold`` tells if all are met)."""
@@ -189,6 +193,7 @@ def synthesize_r_alpha(
     seed: int = 0,
     disturbance_bound: float = 10.0,
     q_range: tuple[float | Sequence[float], float | Sequence[float]] = (0.0, 2 * np.pi),
+    sample_period: float | None = None,
 ) -> RAlphaController:
     """Design an r-alpha controller for ``robot`` with parameters in ``box``.
 
@@ -196,7 +201,8 @@ def synthesize_r_alpha(
     ``disturbance_bound`` [N m], the bound the designer assumes on ``d``). Gains left ``None`` are
     set to the least conservative values meeting the design conditions: ``Lambda = alpha I``,
     ``Q = alpha beta1 I``, ``eta = (alpha r)^2 lambda_min(Q) beta0 / beta1``. Given gains are kept
-    as they are; check :meth:`RAlphaController.design_conditions`.
+    as they are; check :meth:`RAlphaController.design_conditions`. ``sample_period`` [s] is the
+    period the law runs at (``None``: continuous time).
     """
     if betas is None:
         betas = estimate_betas(robot, box, n_samples, seed, q_range, disturbance_bound)
@@ -208,4 +214,6 @@ def synthesize_r_alpha(
     if eta is None:
         lambda_min_Q = float(np.linalg.eigvalsh(gain_matrix(Q, dof, "Q"))[0])
         eta = (alpha * r) ** 2 * lambda_min_Q * betas.beta0 / betas.beta1
-    return RAlphaController(betas, dof, r=r, alpha=alpha, Lambda=Lambda, Q=Q, eta=eta)
+    return RAlphaController(
+        betas, dof, r=r, alpha=alpha, Lambda=Lambda, Q=Q, eta=eta, sample_period=sample_period
+    )

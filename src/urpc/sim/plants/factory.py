@@ -7,11 +7,15 @@ from typing import Any
 
 from ...errors import InputError
 from ...model.robot import Robot
+from ...names import PLANT_BACKENDS
 from .mujoco_plant import MujocoPlant
 from .pinocchio_plant import PinocchioPlant
 from .plant import Plant, PlantKind
 
-PLANTS: dict[str, type[Plant]] = {"pinocchio": PinocchioPlant, "mujoco": MujocoPlant}
+#: Plant backend name (:data:`urpc.names.PLANT_BACKENDS`) -> class.
+PLANTS: dict[str, type[Plant]] = dict(
+    zip(PLANT_BACKENDS, (PinocchioPlant, MujocoPlant), strict=True)
+)
 
 
 def make_plant(kind: PlantKind | str, robot: Robot, **options: Any) -> Plant:

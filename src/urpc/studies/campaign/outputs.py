@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from ...atomic import check_writable, write_files
 from ...errors import InputError
-from ...sim.results import check_writable, write_files
 
 #: File names written by :meth:`CampaignResult.save`.
 RUNS_NAME, SUMMARY_NAME, HISTOGRAM_NAME = "runs.csv", "summary.json", "histogram.png"
@@ -19,8 +19,8 @@ RUNS_NAME, SUMMARY_NAME, HISTOGRAM_NAME = "runs.csv", "summary.json", "histogram
 
 def write_outputs(directory: str | Path, writers: Mapping[str, Callable[[Path], None]]) -> Path:
     """Write the files of ``writers`` (file name -> function writing it at a path) into
-    ``directory`` atomically (:func:`urpc.sim.results.write_files`), after
-    :func:`urpc.sim.results.check_writable`.
+    ``directory`` atomically (:func:`urpc.atomic.write_files`), after
+    :func:`urpc.atomic.check_writable`.
 
     Raises:
         InputError: the folder cannot be written (names it).

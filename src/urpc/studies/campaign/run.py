@@ -12,9 +12,9 @@ from typing import Any
 import numpy as np
 
 from ... import __version__
+from ...atomic import check_writable
 from ...errors import InputError
 from ...model.parameter_box import JOINTS
-from ...sim.results import check_writable
 from ..certification import certificate_fields
 from ..pool import submit_all, worker_pool
 from ..scenario import Scenario, build, build_controller, load_scenario

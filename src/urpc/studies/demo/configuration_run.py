@@ -123,7 +123,6 @@ def run_configuration(
             trajectory,
             duration=duration,
             q0=initial_position(trajectory, initial_offset),
-            sample_period=sample_period,
             disturbance_bound=disturbance_bound,
             seed=seed,
             epsilon=epsilon,

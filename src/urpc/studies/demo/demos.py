@@ -7,7 +7,9 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ...atomic import replace_file
 from ...errors import InputError
+from ...jsonsafe import jsonable
 from .configuration_run import run_configuration
 from .figures import plot_reconfigure, plot_tool_change
 from .progress import ProgressReporter
@@ -166,9 +168,7 @@ def _write_replay(out: Path, parts, title: str) -> Path | None:
 
 
 def write_json(path: Path, payload: Mapping[str, Any]) -> None:
-    from ...cli.common import jsonable
-
+    """``payload`` as JSON (non-finite numbers as ``null``) in ``path``, atomically."""
+    text = json.dumps(jsonable(dict(payload)), indent=2, allow_nan=False) + "\n"
     path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f".{path.name}.partial")
-    partial.write_text(json.dumps(jsonable(dict(payload)), indent=2, allow_nan=False) + "\n")
-    partial.replace(path)
+    replace_file(path, lambda partial: partial.write_text(text))

@@ -87,7 +87,7 @@ def plot_tool_change(run: ToolChangeRun) -> Figure:
     )
     top.set_ylabel(r"$\|e\|$ [rad]")
     top.legend(loc="upper left", fontsize="small")
-    bottom.plot(result.t, result.phi, color="tab:blue")
+    bottom.plot(result.t, result.diagnostics["phi"], color="tab:blue")
     bottom.set_ylabel(r"$\phi$ [N m s/rad]")
     bottom.set_xlabel("time [s]")
     bottom.grid(True, alpha=0.3)

@@ -118,8 +118,8 @@ class ToolChangeRun:
             ),
             "max_error_after_change": float(error[t >= self.t_change - 1e-12].max()),
             "phi_at_switch": {
-                "end_of_old_controller": float(self.segments[-2].phi[-1]),
-                "start_of_new_controller": float(last.phi[0]),
+                "end_of_old_controller": float(self.segments[-2].diagnostics["phi"][-1]),
+                "start_of_new_controller": float(last.diagnostics["phi"][0]),
             },
             "controller_state_at_switch": {
                 "end_of_old_controller": self.state_before.tolist(),
@@ -234,7 +234,6 @@ def tool_change_run(
                 q0=q0,
                 qd0=qd0,
                 controller_state0=state,
-                sample_period=sample_period,
                 disturbance_bound=disturbance_bound,
                 seed=seed + k,
                 epsilon=epsilon,
@@ -266,18 +265,26 @@ def concatenate(segments: Sequence[SimulationResult], offsets: Sequence[float]) 
     later segment's first."""
     values: dict[str, Any] = {}
     last = len(segments) - 1
-    for item in dataclasses.fields(SimulationResult):
-        parts = [getattr(segment, item.name) for segment in segments]
-        if not isinstance(parts[0], np.ndarray):
-            values[item.name] = parts[0]
-            continue
+
+    def joined(name: str, parts: list[np.ndarray]) -> np.ndarray:
         pieces = []
         for k, (segment, part) in enumerate(zip(segments, parts, strict=True)):
             if part.shape[:1] == segment.t.shape:
                 part = part if k == last else part[:-1]
-                part = part + offsets[k] if item.name == "t" else part
+                part = part + offsets[k] if name == "t" else part
             pieces.append(part)
-        values[item.name] = np.concatenate(pieces)
+        return np.concatenate(pieces)
+
+    for item in dataclasses.fields(SimulationResult):
+        parts = [getattr(segment, item.name) for segment in segments]
+        if item.name == "diagnostics":
+            values[item.name] = {
+                name: joined(name, [part[name] for part in parts]) for name in parts[0]
+            }
+        elif isinstance(parts[0], np.ndarray):
+            values[item.name] = joined(item.name, parts)
+        else:
+            values[item.name] = parts[0]
     values["duration"] = float(values["t"][-1] - values["t"][0])
     values["plant"] = " | ".join(
         f"from {offset:g} s: {segment.plant}"
@@ -289,6 +296,8 @@ def concatenate(segments: Sequence[SimulationResult], offsets: Sequence[float]) 
         "segments": [segment.info for segment in segments],
         "offsets": [float(offset) for offset in offsets],
     }
+    if "diagnostic_units" in segments[0].info:
+        values["info"]["diagnostic_units"] = segments[0].info["diagnostic_units"]
     return SimulationResult(**values)
 
 

@@ -21,7 +21,7 @@ and writes into ``out_dir``:
 
 Each run is seeded by its scenario file, so a parallel reproduction gives the same series as a
 serial one (``tests/test_paper.py`` checks it). Nothing is written into ``out_dir`` before every run
-has finished (:func:`urpc.sim.results.write_files`).
+has finished (:func:`urpc.atomic.write_files`).
 
 Modules: ``runs`` (the twelve runs in worker processes), ``report`` (``results.json`` and
 ``results.md``), ``figures`` and ``reproduce`` (:func:`reproduce_paper`).

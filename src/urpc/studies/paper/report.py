@@ -4,7 +4,6 @@ conditions) and its Markdown table ``results.md``."""
 from __future__ import annotations
 
 import json
-import math
 from typing import Any
 
 from ...errors import InputError
@@ -86,7 +85,7 @@ def results_markdown(document: dict) -> str:
     ]
     for run in document["runs"]:
         cells = [str(run["scenario"]), run["initial_condition"], run["controller"]]
-        cells += [_cell(key, run[key]) for key, _, _ in TABLE_METRICS]
+        cells += [_cell(key, run.get(key)) for key, _, _ in TABLE_METRICS]
         lines.append("| " + " | ".join(cells) + " |")
     betas = document["betas"]
     lines += [
@@ -130,15 +129,3 @@ def _cell(key: str, value: Any) -> str:
 
 def _yes(flag: bool) -> str:
     return "yes" if flag else "no"
-
-
-def jsonable(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [jsonable(v) for v in value]
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if hasattr(value, "item"):
-        return jsonable(value.item())
-    return value

@@ -10,10 +10,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from ...atomic import check_writable, write_files
 from ...errors import InputError
-from ...sim.results import check_writable, write_files
+from ...jsonsafe import jsonable
 from .figures import figure_writers
-from .report import document_of, jsonable, results_markdown
+from .report import document_of, results_markdown
 from .runs import PAPER_CONTROLLERS, PAPER_RUNS, RunReporter, run_all
 
 #: Default output directory of ``urpc reproduce-paper``.

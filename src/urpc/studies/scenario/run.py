@@ -27,7 +27,7 @@ def interval_synthesis_options(scenario: Scenario) -> dict[str, Any]:
 
 def build_controller(setup: ScenarioSetup, controller: str | None = None) -> Controller:
     """Synthesize the scenario's controller (or ``controller``, one of :data:`CONTROLLERS`) with
-    its options from the scenario.
+    its options from the scenario, for the scenario's sample period (every law runs at it).
 
     ``interval`` options: the keyword arguments of :func:`urpc.control.synthesis.synthesize`
     (:func:`interval_synthesis_options`); a sampled scenario runs ``sampled_law: implicit`` (the
@@ -55,7 +55,9 @@ def build_controller(setup: ScenarioSetup, controller: str | None = None) -> Con
         if name == "computed-torque":
             from ...control.computed_torque import synthesize_computed_torque
 
-            return synthesize_computed_torque(setup.robot, setup.box, **options)
+            return synthesize_computed_torque(
+                setup.robot, setup.box, sample_period=scenario.sample_period, **options
+            )
         from ...control.r_alpha import PAPER_BETAS, Betas, synthesize_r_alpha
 
         betas = options.pop("betas", "estimate")
@@ -66,7 +68,9 @@ def build_controller(setup: ScenarioSetup, controller: str | None = None) -> Con
         if "disturbance_bound" not in options:
             known = setup.box.disturbance_bound
             options["disturbance_bound"] = scenario.disturbance if known is None else known
-        return synthesize_r_alpha(setup.robot, setup.box, **options)
+        return synthesize_r_alpha(
+            setup.robot, setup.box, sample_period=scenario.sample_period, **options
+        )
     except InputError as exc:
         if exc.source is not None:
             raise
@@ -93,10 +97,23 @@ def simulate_setup(
     setup: ScenarioSetup, controller: Controller, progress: Any = None
 ):  # -> urpc.sim.results.SimulationResult
     """Simulate a built scenario with a synthesized controller (the last step of
-    :func:`run_scenario`, for callers that want to inspect the setup or the controller)."""
+    :func:`run_scenario`, for callers that want to inspect the setup or the controller). The
+    controller runs at its own period, which must be the scenario's.
+
+    Raises:
+        InputError: the controller was built for another sample period than the scenario's.
+    """
     from ...sim.simulation import simulate
 
     scenario = setup.scenario
+    if controller.sample_period != scenario.sample_period:
+        raise InputError(
+            f"controller {controller.name!r} runs at {_period(controller.sample_period)}, the "
+            f"scenario at {_period(scenario.sample_period)}: synthesize it for the scenario "
+            "(build_controller(setup))",
+            None if scenario.source is None else str(scenario.source),
+            "sample_period",
+        )
     result = simulate(
         setup.plant,
         controller,
@@ -104,7 +121,6 @@ def simulate_setup(
         duration=scenario.duration,
         q0=setup.q0,
         qd0=setup.qd0,
-        sample_period=scenario.sample_period,
         disturbance_bound=scenario.disturbance,
         seed=scenario.seed,
         torque_limit=setup.torque_limit,
@@ -120,6 +136,10 @@ def simulate_setup(
         "joint_kinds": list(setup.robot.joint_kinds),  # units: rad, N m or m, N per joint
     }
     return dataclasses.replace(result, info=info)
+
+
+def _period(period: float | None) -> str:
+    return "continuous time" if period is None else f"T = {period:g} s"
 
 
 def true_parameter_values(setup: ScenarioSetup) -> dict[str, dict[str, float]]:

@@ -13,20 +13,20 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Literal, get_args
+from typing import Any, Literal
 
+from ... import names
 from ...errors import InputError, did_you_mean
 from ...formats import scenario as schema
 from ...formats.base import read_yaml, validate
 from ...model.catalog import builtin_root
-from ...sim.plants import PLANTS
 
 #: Controllers a scenario can run.
-CONTROLLERS: tuple[str, ...] = get_args(schema.ControllerName)
+CONTROLLERS: tuple[str, ...] = names.CONTROLLERS
 #: Top-level keys of a scenario file.
 SCENARIO_KEYS: tuple[str, ...] = tuple(schema.ScenarioFile.model_fields)
 #: Plant backends a scenario can simulate with (``urpc.sim.plants.PLANTS``).
-PLANT_BACKENDS = tuple(PLANTS)
+PLANT_BACKENDS = names.PLANT_BACKENDS
 #: Where the flags of :meth:`Scenario.with_overrides` come from, in error messages.
 OVERRIDE_SOURCE = "command-line override"
 

@@ -1,0 +1,23 @@
+"""The valid names of urpc's fixed sets, written once.
+
+Every place that accepts or lists one of these names reads it from here: the scenario format
+(its ``Literal`` types and JSON Schema), the command-line parser (its ``choices``), the
+registries that map a name to its class (:data:`urpc.bounds.METHODS`,
+:data:`urpc.sim.plants.PLANTS`) and the error messages. This module imports nothing, so the
+command line lists the names without importing Pinocchio, MuJoCo or the controllers; the classes
+behind a name are imported only when it is used.
+"""
+
+from __future__ import annotations
+
+#: Controllers a scenario or ``urpc simulate --controller`` can run.
+CONTROLLERS = ("interval", "r-alpha", "computed-torque")
+#: Bound methods of the mismatch torque (:func:`urpc.make_bound`).
+BOUND_METHODS = ("hull", "vertex", "rigorous")
+#: Plants that integrate the true robot (:func:`urpc.sim.plants.make_plant`).
+PLANT_BACKENDS = ("pinocchio", "mujoco")
+#: How a sampled interval controller runs: ``implicit`` (the certified sampled-data law of
+#: :mod:`urpc.control.interval`) or ``paper`` (the paper's law unchanged under the hold).
+SAMPLED_LAWS = ("implicit", "paper")
+#: Reference trajectories of a scenario file (:mod:`urpc.trajectories`).
+TRAJECTORY_KINDS = ("paper", "sinusoid", "quintic", "file", "waypoints")
