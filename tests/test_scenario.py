@@ -222,7 +222,7 @@ def test_defaults_and_arithmetic_values(tmp_path):
     reference = setup.trajectory.reference(0.0)
     np.testing.assert_allclose(setup.q0, reference.q)  # at_reference by default
     np.testing.assert_allclose(setup.qd0, reference.qd)
-    assert "drawn uniformly from the box (seed 0)" in setup.true_description
+    assert "drawn uniformly from the rigid bodies of the box (seed 0)" in setup.true_description
 
 
 def test_sampled_true_parameters_are_seeded_and_inside_the_box(tmp_path):
