@@ -166,9 +166,7 @@ class ControlLoop:
             qd_desired=s["qd_desired"],
             torque=s["torque"],
             disturbance=np.zeros_like(s["torque"]),
-            diagnostics={
-                name: s[name] for name in self.controller.diagnostic_units if name in s
-            },
+            diagnostics={name: s[name] for name in self.controller.diagnostic_units if name in s},
             saturated=s["clipped"],
             controller=self.controller.name,
             epsilon=self.epsilon,
