@@ -197,22 +197,9 @@ class CellFloor:
         key = (round(tube, 15), round(r_max, 12), round(extension, 15))
         if key in self._cache:
             return self._cache[key]
-        n, cells = self.dof, self.cells
+        cells = self.cells
         q, qd_a, qdd_a, velocity = self._states(tube, r_max, extension)
-        # Inertia models at each cell's centre, and their derivatives in q over the whole box.
-        centers = self.regressor.mass_matrices(Ball.point(q.val.mid), self._parameters)
-        diagonal = np.einsum("pi,ij->pij", self._armature, np.eye(n))
-        centers = Ball(centers.mid + diagonal, centers.rad)  # (cells, P, n, n)
-        along = Jet(
-            q.val.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n))),
-            Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
-        )
-        slopes = self.regressor.mass_matrices(along, self._parameters).dot  # (cells, k, P, n, n)
-        models, model_slopes = [], []
-        for index in range(len(self._parameters)):
-            model, slope = _relative(centers[:, index], slopes[:, :, index], q.val.rad)
-            models.append(model)
-            model_slopes.append(slope)
+        models, model_slopes = self._inertia_models(q.val)
         nominal, law = models[0], models[1]
         # ||M_L^-1/2 dM_L/dt M_L^-1/2|| <= sum_k |qd_k| s_k / (1 - eps), qd the plant's velocity.
         law_rate_norm = np.sum(velocity.magnitude * model_slopes[1], axis=-1) / (
@@ -331,24 +318,33 @@ class CellFloor:
         """Only ``lambda_L`` (the lightest mode of every piece's lower bound) and ``lambda_U``
         over the cells at ``e = 0``: what Theorem 1 and the paper law's condition need, without
         the mismatch and Coriolis enclosures."""
-        n, cells = self.dof, self.cells
         q, _, _, _ = self._states(0.0, 0.0, extension)
-        centers = self.regressor.mass_matrices(Ball.point(q.val.mid), self._parameters)
-        diagonal = np.einsum("pi,ij->pij", self._armature, np.eye(n))
-        centers = Ball(centers.mid + diagonal, centers.rad)
-        along = Jet(
-            q.val.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n))),
-            Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
-        )
-        slopes = self.regressor.mass_matrices(along, self._parameters).dot
+        models, _ = self._inertia_models(q.val)
         lower, upper = math.inf, 0.0
-        for index in range(2, len(self._parameters), 2):
-            low, _ = _relative(centers[:, index], slopes[:, :, index], q.val.rad)
-            high, _ = _relative(centers[:, index + 1], slopes[:, :, index + 1], q.val.rad)
+        for low, high in zip(models[2::2], models[3::2], strict=True):
             lam_L = np.where(low.valid, low.lam_min * (1 - low.eps), -math.inf)
             lower = min(lower, float(np.min(lam_L)) * (1 - LAPACK_MARGIN))
             upper = max(upper, float(np.max(high.lam_max * (1 + high.eps))) * (1 + LAPACK_MARGIN))
-        return {"cells": float(cells), "lambda_L": lower, "lambda_U": upper}
+        return {"cells": float(self.cells), "lambda_L": lower, "lambda_U": upper}
+
+    def _inertia_models(self, q: Ball) -> tuple[list[_Model], list[np.ndarray]]:
+        """Every inertia model (nominal, the law's ``M_L``, each piece's ``M_L`` and ``M_U``) over
+        the boxes of ``q``: its value at each cell's centre and its derivatives in ``q`` over the
+        whole box (:func:`_relative`), with the slopes ``s_k`` for its rates."""
+        n, cells = self.dof, self.cells
+        centers = self.regressor.mass_matrices(Ball.point(q.mid), self._parameters)
+        diagonal = np.einsum("pi,ij->pij", self._armature, np.eye(n))
+        centers = Ball(centers.mid + diagonal, centers.rad)  # (cells, P, n, n)
+        along = Jet(
+            q.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n))),
+            Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
+        )
+        slopes = self.regressor.mass_matrices(along, self._parameters).dot  # (cells, k, P, n, n)
+        pairs = [
+            _relative(centers[:, index], slopes[:, :, index], q.rad)
+            for index in range(len(self._parameters))
+        ]
+        return [model for model, _ in pairs], [slope for _, slope in pairs]
 
     def _mismatch_parts(self, tube: float, r_max: float, extension: float):
         """``Y_SL`` over each cell of the reference at ``e = 0`` (a ball), and its Jacobian along
