@@ -221,7 +221,7 @@ class _SampledSearch:
         itself with ``||r||`` inside the enclosure: the states from which the floor is reached
         once the gains have saturated."""
         rho = quantities["tube"]
-        while rho > least:
+        while rho > max(least, 1e-6 * quantities["tube"]):
             floor, parts = self.floor_of.floor_at(self.T, self.d, quantities, rho)
             if floor <= rho and parts.get("r_sup", math.inf) <= quantities["r_max"]:
                 return rho
