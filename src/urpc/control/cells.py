@@ -9,15 +9,8 @@ rates, the Slotine-Li regressor and its rate, Coriolis matrices of every plant o
 quantity is taken at a point of the reference: nothing can slip between grid points, whatever the
 reference, the period or the duration.
 
-From the enclosure ``M in [M_c - R, M_c + R]`` of a symmetric matrix, with ``M_c = L L^T``::
-
-    (1 - eps) M_c <= M <= (1 + eps) M_c,   eps = || |L^-1| R |L^-1|^T || / lambda_min(L^-1 M_c L^-T)
-
-(``x^T E x <= |x|^T R |x|``, and ``||X||_2 <= || |X| ||_2``), which gives every eigenvalue,
-generalized eigenvalue, trace and norm the argument uses from one factorization of the cell's
-centre matrix; ``M^-1 x = M_c^-1 x + L^-T ((1 + F)^-1 - 1) L^-1 x`` with ``||F|| <= eps`` bounds
-the inverse applied to a vector. LAPACK's rounding on the centre matrices (backward errors of
-order ``n u cond``) is covered by a relative margin :data:`LAPACK_MARGIN` on each such figure.
+The bounds over one cell (inertia models, the norms of the mismatch, the Coriolis matrix of
+every plant) are in :mod:`urpc.control.cell_bounds`.
 """
 
 from __future__ import annotations
@@ -27,98 +20,29 @@ import math
 
 import numpy as np
 
-from ..bounds.base import link_body_placement
-from ..bounds.hull import barycentric_enclosure
 from ..model.inertia_bounds import InertiaBounds
-from ..model.regressor_balls import Ball, BallRegressor, Jet, parameters_of
+from ..model.regressor_balls import Ball, BallRegressor, Jet, matvec, parameters_of
 from ..model.uncertainty import ParameterBox
 from ..trajectories import Trajectory
+from .cell_bounds import (
+    LAPACK_MARGIN,
+    CenteredCoriolis,
+    InertiaModel,
+    MismatchNorms,
+    congruence,
+    inertia_model,
+    link_parameters,
+    plant_hull,
+)
 from .interval import PHI_MAX_FACTOR, IntervalPassivityController
 from .sampled_joints import JointTerms
 
-#: Relative margin on every eigenvalue and norm computed by LAPACK from a cell's centre matrices.
-LAPACK_MARGIN = 1e-9
 #: At most this many pieces of the box (the cost grows linearly with it).
 PIECES = 4
 #: Cells are cut so that the reference moves at most this far [rad] per joint within one.
 CELL_MOTION = 0.01
 #: Bounds on the number of cells.
 MIN_CELLS, MAX_CELLS = 16, 4000
-
-
-@dataclasses.dataclass
-class _Model:
-    """Per cell, a symmetric matrix model's centre ``M_c``, its Cholesky inverse ``P = L^-1`` and
-    the relative radius ``eps``."""
-
-    center: np.ndarray  # (cells, n, n)
-    inverse_factor: np.ndarray  # P = L^-1, (cells, n, n)
-    eps: np.ndarray  # (cells,)
-    lam_min: np.ndarray  # lambda_min(M_c), (cells,)
-    lam_max: np.ndarray  # lambda_max(M_c), (cells,)
-    valid: np.ndarray  # M_c positive definite and eps < 1, (cells,)
-
-    @property
-    def inverse(self) -> np.ndarray:
-        P = self.inverse_factor
-        return np.swapaxes(P, -1, -2) @ P
-
-    def kappa(self) -> np.ndarray:
-        """``||M^-1 x - M_c^-1 x|| <= kappa ||L^-1 x||`` over the enclosure."""
-        eps = np.minimum(self.eps, 0.999999)
-        return eps / (1 - eps) / np.sqrt(np.maximum(self.lam_min, 1e-300))
-
-    def scaled_norm(self, X: Ball) -> np.ndarray:
-        """``||M^-1/2 X M^-1/2||`` over every ``M`` of the enclosure and ``X`` of the ball (``M``
-        a lower bound of the plant's inertia: also a bound in the plant's metric)."""
-        P = np.abs(self.inverse_factor)
-        magnitude = np.abs(X.mid) + X.rad
-        norm = _spectral_norm(P @ magnitude @ np.swapaxes(P, -1, -2))
-        return norm / (1 - np.minimum(self.eps, 0.999999)) * (1 + LAPACK_MARGIN)
-
-
-def _relative(center: Ball, derivatives: Ball, radii: np.ndarray) -> tuple[_Model, np.ndarray]:
-    """The model of a symmetric matrix over a box of ``q``, from its value at the box's centre
-    (``center``, a ball of rounding width) and its partial derivatives over the box
-    (``derivatives``: (cells, k, n, n), ``dM/dq_k`` enclosed over the whole box; ``radii``:
-    (cells, k), the box's half-widths): by the mean value theorem
-    ``M(q) - M_c = sum_k (q_k - q_c,k) dM/dq_k(xi)``, so that with ``P = L^-1``
-
-        ||P (M(q) - M_c) P^T|| <= || |P| R_c |P|^T || + sum_k r_k s_k,
-        s_k = ||P D_k P^T||_2 + || |P| rad(D_k) |P|^T ||_2   (D_k the centre of dM/dq_k)
-
-    which keeps the structure of each derivative (an entrywise bound of ``M(q) - M_c`` alone
-    loses it through ``|P|`` where the lightest mode couples the joints). Returns the model and
-    ``s_k`` per cell (cells, k), for rates ``dM/dt = sum_k qd_k dM/dq_k``."""
-    mid = center.mid
-    eigenvalues = np.linalg.eigvalsh(mid)
-    lam_min, lam_max = eigenvalues[..., 0], eigenvalues[..., -1]
-    positive = lam_min > 1e-12 * np.maximum(lam_max, 1e-300)
-    safe = np.where(positive[..., None, None], mid, np.eye(mid.shape[-1]))
-    L = np.linalg.cholesky(safe)
-    identity = np.broadcast_to(np.eye(mid.shape[-1]), mid.shape)
-    P = np.linalg.solve(L, identity)  # L^-1, batched
-    Pt = np.swapaxes(P, -1, -2)
-    floor = np.linalg.eigvalsh(P @ safe @ Pt)[..., 0]
-    absolute, absolute_t = np.abs(P), np.abs(Pt)
-    Pk, Pkt = P[:, None], Pt[:, None]
-    slopes = _spectral_norm(Pk @ derivatives.mid @ Pkt) + _spectral_norm(
-        absolute[:, None] @ derivatives.rad @ absolute_t[:, None]
-    )
-    slopes = slopes * (1 + LAPACK_MARGIN)
-    spread = _spectral_norm(absolute @ center.rad @ absolute_t) + np.sum(radii * slopes, axis=-1)
-    eps = spread / floor * (1 + LAPACK_MARGIN) + LAPACK_MARGIN
-    model = _Model(mid, P, eps, lam_min, lam_max, positive & (eps < 1))
-    return model, slopes / floor[:, None]
-
-
-def _spectral_norm(X: np.ndarray) -> np.ndarray:
-    """Spectral norm of each matrix of a batch (symmetric or not)."""
-    return np.linalg.norm(X, ord=2, axis=(-2, -1))
-
-
-def _norm(x: np.ndarray, axis=-2) -> np.ndarray:
-    return np.sqrt(np.sum(x * x, axis=axis))
 
 
 class CellFloor:
@@ -165,8 +89,8 @@ class CellFloor:
             models += [bounds.lower_robot, bounds.upper_robot]
         self._parameters = np.stack([parameters_of(m) for m in models])
         self._armature = np.stack([np.asarray(m.model.armature, dtype=float) for m in models])
-        self._links = [[_link_box(robot, b) for b in p.uncertain_links] for p in self.pieces]
-        self._plant_hull = _plant_hull(robot, box)
+        self._links = [[link_parameters(robot, b) for b in p.uncertain_links] for p in self.pieces]
+        self._plant_hull = plant_hull(robot, box)
         self._cache: dict[tuple, dict] = {}
 
     # ------------------------------------------------------------------------- cell boxes
@@ -213,13 +137,13 @@ class CellFloor:
         mismatch = Ball(hull.mid - self._parameters[0], hull.rad)
         # The plant's Coriolis matrix (every plant of the box, the plant's velocity) and the
         # Coriolis mismatch along qd_a, as centered forms (their norms in each piece's metric).
-        coriolis = _CenteredCoriolis(self.regressor, q.val, velocity, hull)
-        coriolis_mismatch = _CenteredCoriolis(self.regressor, q.val, qd_a.val, mismatch)
+        coriolis = CenteredCoriolis(self.regressor, q.val, velocity, hull)
+        coriolis_mismatch = CenteredCoriolis(self.regressor, q.val, qd_a.val, mismatch)
         # d/dt of the nominal torque Y_SL pi0 (held over the period while the reference moves).
         pi0 = Ball.point(self._parameters[0])
-        torque_rate = _matvec_ball(Y.dot, pi0)
+        torque_rate = matvec(Y.dot, pi0)
         # The nominal torque's Jacobian along e: |(G pi0) ed|_i <= sqrt(sum_k (G pi0)_ik^2) ||ed||.
-        along_error = _matvec_ball(tube_jacobian, pi0)  # (cells, k, n)
+        along_error = matvec(tube_jacobian, pi0)  # (cells, k, n)
         torque_per_error_rate = np.sqrt(
             np.sum((np.abs(along_error.mid) + along_error.rad) ** 2, axis=1)
         )
@@ -246,9 +170,9 @@ class CellFloor:
             lam_U = upper.lam_max * (1 + upper.eps) * (1 + LAPACK_MARGIN)
             valid = lower.valid & upper.valid & out["valid"]
             # Generalized eigenvalues through the Cholesky factors: lambda(A, B) = lambda(P A P^T).
-            generalized = np.linalg.eigvalsh(_congruence(upper.inverse_factor, law.center))[:, 0]
-            low = np.linalg.eigvalsh(_congruence(upper.inverse_factor, nominal.center))[:, 0]
-            high = np.linalg.eigvalsh(_congruence(lower.inverse_factor, nominal.center))[:, -1]
+            generalized = np.linalg.eigvalsh(congruence(upper.inverse_factor, law.center))[:, 0]
+            low = np.linalg.eigvalsh(congruence(upper.inverse_factor, nominal.center))[:, 0]
+            high = np.linalg.eigvalsh(congruence(lower.inverse_factor, nominal.center))[:, -1]
             beta = np.where(valid, generalized * (1 - law.eps) / (1 + upper.eps), -math.inf)
             nu = np.maximum(
                 1.0 - low * (1 - nominal.eps) / (1 + upper.eps),
@@ -257,7 +181,7 @@ class CellFloor:
             nu = np.where(valid, nu, math.inf)
             beta = beta * (1 - LAPACK_MARGIN)
             nu = nu * (1 + LAPACK_MARGIN) + LAPACK_MARGIN
-            metrics = _Metrics(law, upper)
+            metrics = MismatchNorms(law, upper)
             # (centre, per unit of tube) pairs, (2, cells): R(rho) = R[0] + rho R[1].
             R, RM, Rs, V = (np.zeros((2, cells)) for _ in range(4))
             Rdot, Vdot = np.zeros((2, cells)), np.zeros((2, cells))
@@ -327,10 +251,10 @@ class CellFloor:
             upper = max(upper, float(np.max(high.lam_max * (1 + high.eps))) * (1 + LAPACK_MARGIN))
         return {"cells": float(self.cells), "lambda_L": lower, "lambda_U": upper}
 
-    def _inertia_models(self, q: Ball) -> tuple[list[_Model], list[np.ndarray]]:
+    def _inertia_models(self, q: Ball) -> tuple[list[InertiaModel], list[np.ndarray]]:
         """Every inertia model (nominal, the law's ``M_L``, each piece's ``M_L`` and ``M_U``) over
         the boxes of ``q``: its value at each cell's centre and its derivatives in ``q`` over the
-        whole box (:func:`_relative`), with the slopes ``s_k`` for its rates."""
+        whole box (:func:`inertia_model`), with the slopes ``s_k`` for its rates."""
         n, cells = self.dof, self.cells
         centers = self.regressor.mass_matrices(Ball.point(q.mid), self._parameters)
         diagonal = np.einsum("pi,ij->pij", self._armature, np.eye(n))
@@ -341,7 +265,7 @@ class CellFloor:
         )
         slopes = self.regressor.mass_matrices(along, self._parameters).dot  # (cells, k, P, n, n)
         pairs = [
-            _relative(centers[:, index], slopes[:, :, index], q.rad)
+            inertia_model(centers[:, index], slopes[:, :, index], q.rad)
             for index in range(len(self._parameters))
         ]
         return [model for model, _ in pairs], [slope for _, slope in pairs]
@@ -486,135 +410,6 @@ class CellFloor:
         return float(self.edges[cell]), float(self.edges[cell + 1])
 
 
-class _Metrics:
-    """The norms a mismatch ``w`` enters the floor with, for one piece: ``||M_L^-1 w||`` (the
-    law's ``M_L`` over the cell, by ``M_L^-1 x = M_c^-1 x + O(kappa ||L^-1 x||)``),
-    ``||M^{1/2} M_L^-1 w||`` for every plant of the piece (``M <= M_U <= (1 + eps_U) U U^T``),
-    ``||M_L^-1/2 w||`` and ``||w||``."""
-
-    def __init__(self, law: _Model, upper: _Model):
-        self.law = law
-        self.inverse = law.inverse
-        self.kappa = law.kappa()
-        self.root_eps = np.sqrt(1 - np.minimum(law.eps, 0.999999))
-        UT = np.swapaxes(_safe_cholesky(upper.center, upper.valid), -1, -2)
-        self.to_metric = UT @ self.inverse
-        self.metric_factor = np.sqrt(1 + upper.eps) * (1 + LAPACK_MARGIN)
-        self.root_U = np.sqrt(upper.lam_max)
-        cells, n = self.inverse.shape[:2]
-        self.identity = np.broadcast_to(np.eye(n), (cells, n, n))
-
-    def _combine(self, equilibrium, metric, scaled, magnitude):
-        equilibrium = equilibrium + self.kappa * scaled
-        metric = (metric + self.root_U * self.kappa * scaled) * self.metric_factor
-        return equilibrium, metric, scaled / self.root_eps, magnitude
-
-    def link(self, W: Ball, G: Ball | None, link: _LinkBox):
-        """The four bounds for one link's ``w = W A delta + G(delta) e`` (pairs, (2, cells))."""
-        return self._combine(
-            _link_bound(self.inverse, W, G, link),
-            _link_bound(self.to_metric, W, G, link),
-            _link_bound(self.law.inverse_factor, W, G, link),
-            _link_bound(self.identity, W, G, link),
-        )
-
-    def vector(self, x: np.ndarray):
-        """The four bounds for any ``w`` with ``|w_i| <= x_i`` (pairs with no tube part)."""
-        column = x[..., None]
-
-        def bound(X):
-            value = _norm(np.abs(X) @ column)[:, 0]
-            return np.stack([value, np.zeros_like(value)])
-
-        return self._combine(
-            bound(self.inverse), bound(self.to_metric), bound(self.law.inverse_factor),
-            bound(self.identity),
-        )  # fmt: skip
-
-
-class _CenteredCoriolis:
-    """The Christoffel matrix ``C(q, v; pi)`` over boxes of ``q``, ``v`` and ``pi`` in a form
-    that keeps the structure of each term for norms ``sup ||P C P^T||``: ``C`` is linear in ``v``
-    and in ``pi``, so with ``v = v_c + dv``, ``pi = pi_c + dpi``::
-
-        C = C(q; v_c, pi_c) + sum_k dv_k C(q; e_k, pi_c) + sum_j dpi_j C(q; v_c, e_j)
-            + sum_kj dv_k dpi_j C(q; e_k, e_j)
-
-    each term enclosed over the box of ``q`` alone (``|dv_k|``, ``|dpi_j|`` at most the boxes'
-    radii), its centre through ``P`` exactly and its (first-order in ``q``) radius with absolute
-    values."""
-
-    def __init__(self, regressor: BallRegressor, q: Ball, v: Ball, parameters: Ball):
-        n = regressor.dof
-        cells = q.mid.shape[0]
-        v_center, pi_center = Ball.point(v.mid), Ball.point(parameters.mid)
-        self.v_rad = v.rad
-        free = np.flatnonzero(parameters.rad > 0)
-        self.pi_rad = parameters.rad[free]
-        directions = np.zeros((len(free), parameters.mid.shape[0]))
-        directions[np.arange(len(free)), free] = 1.0
-        units = Ball.point(np.broadcast_to(np.eye(n), (cells, n, n)))
-        q_each = q.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n)))
-        self.center = regressor.coriolis_matrices(q, v_center, pi_center[None])[:, 0]
-        self.per_velocity = regressor.coriolis_matrices(q_each, units, pi_center[None])[:, :, 0]
-        self.per_parameter = self.per_both = None
-        if len(free):
-            self.per_parameter = regressor.coriolis_matrices(q, v_center, directions)
-            self.per_both = regressor.coriolis_matrices(q_each, units, directions)  # (c,k,j,n,n)
-
-    def norm(self, P: np.ndarray) -> np.ndarray:
-        """``sup ||P C P^T||_2`` per cell over the boxes (``P``: (cells, n, n))."""
-        Pt = np.swapaxes(P, -1, -2)
-        absolute, absolute_t = np.abs(P), np.abs(Pt)
-
-        def structured(X: Ball) -> np.ndarray:
-            extra = X.mid.ndim - 3
-            index = (slice(None),) + (None,) * extra
-            A, At, B, Bt = P[index], Pt[index], absolute[index], absolute_t[index]
-            return _spectral_norm(A @ X.mid @ At) + _spectral_norm(B @ X.rad @ Bt)
-
-        bound = structured(self.center)
-        bound = bound + np.sum(self.v_rad * structured(self.per_velocity), axis=-1)
-        if self.per_parameter is not None:
-            bound = bound + structured(self.per_parameter) @ self.pi_rad
-            both = structured(self.per_both) @ self.pi_rad  # (cells, k)
-            bound = bound + np.sum(self.v_rad * both, axis=-1)
-        return bound * (1 + LAPACK_MARGIN)
-
-
-def _congruence(P: np.ndarray, A: np.ndarray) -> np.ndarray:
-    """``P A P^T`` per cell."""
-    return P @ A @ np.swapaxes(P, -1, -2)
-
-
-def _matvec_ball(Y: Ball, pi: Ball) -> Ball:
-    from ..model.regressor_balls import matvec
-
-    return matvec(Y, pi)
-
-
-def _safe_cholesky(center: np.ndarray, valid: np.ndarray) -> np.ndarray:
-    safe = np.where(valid[..., None, None], center, np.eye(center.shape[-1]))
-    return np.linalg.cholesky(safe)
-
-
-def _plant_hull(robot, box: ParameterBox) -> Ball:
-    """The standard parameters of the joint bodies over the box (nominal plus each uncertain
-    link's barycentric enclosure placed into its body), a ball ``(10 dof,)``."""
-    lower = parameters_of(robot).copy()
-    upper = lower.copy()
-    for link_box in box.uncertain_links:
-        body, A = link_body_placement(robot, link_box.link)
-        lo, hi = barycentric_enclosure(link_box)
-        nominal = link_box.standard_parameters(link_box.nominal)
-        mid, rad = A @ (0.5 * (lo + hi) - nominal), np.abs(A) @ (0.5 * (hi - lo))
-        rad = rad * (1 + 1e-12) + 1e-15 * (np.abs(mid) + np.abs(A) @ np.abs(nominal))
-        columns = slice(10 * body, 10 * body + 10)
-        lower[columns] += mid - rad
-        upper[columns] += mid + rad
-    return Ball.hull(lower, upper)
-
-
 def split_box(box: ParameterBox, pieces: int = PIECES) -> list[ParameterBox]:
     """The box cut along its widest mass intervals (at most 3, relative to their upper end) into
     at most ``pieces`` boxes whose union is the box."""
@@ -640,71 +435,3 @@ def split_box(box: ParameterBox, pieces: int = PIECES) -> list[ParameterBox]:
                 split.append(dataclasses.replace(piece, links=tuple(links)))
         result = split
     return result
-
-
-#: At most this many coordinates of a link's parameter box are enumerated at their vertices;
-#: the others enter by the triangle inequality (sound either way; cost 2^VERTEX_COORDINATES).
-VERTEX_COORDINATES = 5
-
-
-@dataclasses.dataclass(frozen=True)
-class _LinkBox:
-    """Where a link enters ``Y_SL`` and its barycentric hull relative to the nominal:
-    ``delta = mid + rad * s``, ``s in [-1, 1]^10`` (link frame; ``A`` places it in its body)."""
-
-    columns: slice
-    A: np.ndarray
-    mid: np.ndarray
-    rad: np.ndarray
-
-
-def _link_box(robot, box) -> _LinkBox:
-    body, A = link_body_placement(robot, box.link)
-    lower, upper = barycentric_enclosure(box)
-    nominal = box.standard_parameters(box.nominal)
-    mid = 0.5 * (lower + upper) - nominal
-    rad = (0.5 * (upper - lower)) * (1 + 1e-12) + 1e-15 * (np.abs(mid) + np.abs(nominal))
-    rad[upper == lower] = 0.0
-    return _LinkBox(slice(10 * body, 10 * body + 10), A, mid, rad)
-
-
-def _link_bound(X: np.ndarray, W: Ball, G: Ball | None, link: _LinkBox) -> np.ndarray:
-    """Per cell, ``(c, g)`` with ``||X w|| <= c + rho g`` over ``w = W A delta + G(delta) e`` for
-    every ``delta`` of the link's box, every ``W``, ``G`` in their balls and ``||e|| <= rho``
-    (``X``: (cells, m, n); ``W``: (cells, n, 10); ``G``: (cells, k, n, 10), the Jacobian along the
-    tube, enclosed over a tube at least as wide as ``rho``). Shape (2, cells).
-
-    ``||X W A delta||`` is convex in ``delta``: its maximum over the box is at a vertex. The
-    :data:`VERTEX_COORDINATES` coordinates that move it most are enumerated at their vertices,
-    the others enter by the triangle inequality (``rad_j ||X W A e_j||``); the radii of the balls
-    enter with ``|delta| <= |mid| + rad``."""
-    XW = X @ (W.mid @ link.A)  # (cells, m, 10)
-    column_norms = _norm(XW)  # (cells, 10)
-    score = np.max(column_norms, axis=0) * link.rad
-    free = np.flatnonzero(link.rad > 0)
-    chosen = free[np.argsort(score[free])[::-1][:VERTEX_COORDINATES]]
-    rest = np.setdiff1d(free, chosen)
-    corners = np.array(np.meshgrid(*[(-1.0, 1.0)] * len(chosen), indexing="ij")).reshape(
-        len(chosen), -1
-    )
-    vertices = np.repeat(link.mid[:, None], corners.shape[1], axis=1)
-    vertices[chosen] += link.rad[chosen, None] * corners
-    bound = _norm(XW @ vertices).max(-1) + column_norms[:, rest] @ link.rad[rest]
-    magnitude = np.abs(link.mid) + link.rad
-    absolute = np.abs(X)
-    radius = (W.rad + 40 * 2.0**-53 * np.abs(W.mid)) @ (np.abs(link.A) @ magnitude)  # (cells, n)
-    bound = bound + _norm(absolute @ radius[..., None])[:, 0]
-    per_tube = np.zeros_like(bound)
-    if G is not None:
-        XG = X[:, None] @ (G.mid @ link.A)  # (cells, k, m, 10)
-        spectral = _spectral_norm(np.moveaxis(XG, -1, 1))  # (cells, 10): ||X G_j||_2
-        triangle = spectral @ magnitude
-        # Frobenius norm of X G(delta) at the enumerated vertices (a quadratic form in delta).
-        H = np.einsum("ckmj,ckml->cjl", XG, XG)
-        quadratic = np.einsum("cjl,jv,lv->cv", H, vertices, vertices)
-        frobenius = np.sqrt(np.maximum(quadratic, 0.0)).max(-1) * (1 + 1e-10)
-        frobenius = frobenius + spectral[:, rest] @ link.rad[rest]
-        spread = (G.rad + 40 * 2.0**-53 * np.abs(G.mid)) @ (np.abs(link.A) @ magnitude)
-        spread = np.sqrt(np.sum(spread * spread, axis=1))  # (cells, n)
-        per_tube = np.minimum(triangle, frobenius) + _norm(absolute @ spread[..., None])[:, 0]
-    return np.stack([bound, per_tube]) * (1 + 1e-10)

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..jsonsafe import jsonable
 from ..trajectories import Trajectory
 from .cells import CellFloor
 from .interval import IntervalPassivityController
@@ -94,7 +95,7 @@ class Certificate:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-ready fields; a non-finite number (an infinite floor) becomes ``None``."""
-        return _finite_or_none(asdict(self))
+        return jsonable(asdict(self))
 
 
 def certify(
@@ -297,7 +298,6 @@ class _SampledSearch:
 
 def _lightest_joint(floor_of: CellFloor, quantities: dict, cell: int) -> int:
     """The joint whose diagonal of ``M_L^-1`` is largest at a cell (the lightest mode's joint)."""
-    law = floor_of.regressor  # noqa: F841 (the law's inverse is in the quantities)
     inverse = quantities["law_inverse_diagonal"][cell]
     return int(np.argmax(inverse))
 
@@ -349,13 +349,3 @@ def _sampled_conditions(
             + f" the period to {max_period:.3g} s",
         ),
     ]  # fmt: skip
-
-
-def _finite_or_none(value):
-    if isinstance(value, dict):
-        return {key: _finite_or_none(item) for key, item in value.items()}
-    if isinstance(value, list | tuple):
-        return [_finite_or_none(item) for item in value]
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value

@@ -1,0 +1,294 @@
+"""Bounds over one cell of the certificate (:mod:`urpc.control.cells`): inertia models from a
+centered form, the norms a link's mismatch enters the floor with, the Coriolis matrix of every
+plant of the box as a centered form, and the parameter box of each link.
+
+From the enclosure of a symmetric matrix over a box of ``q`` (its value at the centre, ``M_c = L
+L^T``, and its derivatives over the box) :func:`inertia_model` gives ``(1 - eps) M_c <= M(q) <=
+(1 + eps) M_c``, from which every eigenvalue, generalized eigenvalue, trace and norm the argument
+uses follows with one factorization of the centre matrix; ``M^-1 x = M_c^-1 x + L^-T ((1 + F)^-1 -
+1) L^-1 x`` with ``||F|| <= eps`` bounds the inverse applied to a vector. LAPACK's rounding on the
+centre matrices (backward errors of order ``n u cond``) is covered by the relative margin
+:data:`LAPACK_MARGIN` on each such figure.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..bounds.base import link_body_placement
+from ..bounds.hull import barycentric_enclosure
+from ..model.regressor_balls import Ball, BallRegressor, parameters_of
+from ..model.uncertainty import ParameterBox
+
+#: Relative margin on every eigenvalue and norm computed by LAPACK from a cell's centre matrices.
+LAPACK_MARGIN = 1e-9
+
+
+@dataclasses.dataclass
+class InertiaModel:
+    """Per cell, a symmetric matrix model's centre ``M_c``, its Cholesky inverse ``P = L^-1`` and
+    the relative radius ``eps``."""
+
+    center: np.ndarray  # (cells, n, n)
+    inverse_factor: np.ndarray  # P = L^-1, (cells, n, n)
+    eps: np.ndarray  # (cells,)
+    lam_min: np.ndarray  # lambda_min(M_c), (cells,)
+    lam_max: np.ndarray  # lambda_max(M_c), (cells,)
+    valid: np.ndarray  # M_c positive definite and eps < 1, (cells,)
+
+    @property
+    def inverse(self) -> np.ndarray:
+        P = self.inverse_factor
+        return np.swapaxes(P, -1, -2) @ P
+
+    def kappa(self) -> np.ndarray:
+        """``||M^-1 x - M_c^-1 x|| <= kappa ||L^-1 x||`` over the enclosure."""
+        eps = np.minimum(self.eps, 0.999999)
+        return eps / (1 - eps) / np.sqrt(np.maximum(self.lam_min, 1e-300))
+
+    def scaled_norm(self, X: Ball) -> np.ndarray:
+        """``||M^-1/2 X M^-1/2||`` over every ``M`` of the enclosure and ``X`` of the ball (``M``
+        a lower bound of the plant's inertia: also a bound in the plant's metric)."""
+        P = np.abs(self.inverse_factor)
+        magnitude = np.abs(X.mid) + X.rad
+        norm = spectral_norm(P @ magnitude @ np.swapaxes(P, -1, -2))
+        return norm / (1 - np.minimum(self.eps, 0.999999)) * (1 + LAPACK_MARGIN)
+
+
+def inertia_model(
+    center: Ball, derivatives: Ball, radii: np.ndarray
+) -> tuple[InertiaModel, np.ndarray]:
+    """The model of a symmetric matrix over a box of ``q``, from its value at the box's centre
+    (``center``, a ball of rounding width) and its partial derivatives over the box
+    (``derivatives``: (cells, k, n, n), ``dM/dq_k`` enclosed over the whole box; ``radii``:
+    (cells, k), the box's half-widths): by the mean value theorem
+    ``M(q) - M_c = sum_k (q_k - q_c,k) dM/dq_k(xi)``, so that with ``P = L^-1``
+
+        ||P (M(q) - M_c) P^T|| <= || |P| R_c |P|^T || + sum_k r_k s_k,
+        s_k = ||P D_k P^T||_2 + || |P| rad(D_k) |P|^T ||_2   (D_k the centre of dM/dq_k)
+
+    which keeps the structure of each derivative (an entrywise bound of ``M(q) - M_c`` alone
+    loses it through ``|P|`` where the lightest mode couples the joints). Returns the model and
+    ``s_k`` per cell (cells, k), for rates ``dM/dt = sum_k qd_k dM/dq_k``."""
+    mid = center.mid
+    eigenvalues = np.linalg.eigvalsh(mid)
+    lam_min, lam_max = eigenvalues[..., 0], eigenvalues[..., -1]
+    positive = lam_min > 1e-12 * np.maximum(lam_max, 1e-300)
+    safe = np.where(positive[..., None, None], mid, np.eye(mid.shape[-1]))
+    L = np.linalg.cholesky(safe)
+    identity = np.broadcast_to(np.eye(mid.shape[-1]), mid.shape)
+    P = np.linalg.solve(L, identity)  # L^-1, batched
+    Pt = np.swapaxes(P, -1, -2)
+    floor = np.linalg.eigvalsh(P @ safe @ Pt)[..., 0]
+    absolute, absolute_t = np.abs(P), np.abs(Pt)
+    Pk, Pkt = P[:, None], Pt[:, None]
+    slopes = spectral_norm(Pk @ derivatives.mid @ Pkt) + spectral_norm(
+        absolute[:, None] @ derivatives.rad @ absolute_t[:, None]
+    )
+    slopes = slopes * (1 + LAPACK_MARGIN)
+    spread = spectral_norm(absolute @ center.rad @ absolute_t) + np.sum(radii * slopes, axis=-1)
+    eps = spread / floor * (1 + LAPACK_MARGIN) + LAPACK_MARGIN
+    model = InertiaModel(mid, P, eps, lam_min, lam_max, positive & (eps < 1))
+    return model, slopes / floor[:, None]
+
+
+def spectral_norm(X: np.ndarray) -> np.ndarray:
+    """Spectral norm of each matrix of a batch (symmetric or not)."""
+    return np.linalg.norm(X, ord=2, axis=(-2, -1))
+
+
+def column_norm(x: np.ndarray, axis=-2) -> np.ndarray:
+    return np.sqrt(np.sum(x * x, axis=axis))
+
+
+class MismatchNorms:
+    """The norms a mismatch ``w`` enters the floor with, for one piece: ``||M_L^-1 w||`` (the
+    law's ``M_L`` over the cell, by ``M_L^-1 x = M_c^-1 x + O(kappa ||L^-1 x||)``),
+    ``||M^{1/2} M_L^-1 w||`` for every plant of the piece (``M <= M_U <= (1 + eps_U) U U^T``),
+    ``||M_L^-1/2 w||`` and ``||w||``."""
+
+    def __init__(self, law: InertiaModel, upper: InertiaModel):
+        self.law = law
+        self.inverse = law.inverse
+        self.kappa = law.kappa()
+        self.root_eps = np.sqrt(1 - np.minimum(law.eps, 0.999999))
+        UT = np.swapaxes(safe_cholesky(upper.center, upper.valid), -1, -2)
+        self.to_metric = UT @ self.inverse
+        self.metric_factor = np.sqrt(1 + upper.eps) * (1 + LAPACK_MARGIN)
+        self.root_U = np.sqrt(upper.lam_max)
+        cells, n = self.inverse.shape[:2]
+        self.identity = np.broadcast_to(np.eye(n), (cells, n, n))
+
+    def _combine(self, equilibrium, metric, scaled, magnitude):
+        equilibrium = equilibrium + self.kappa * scaled
+        metric = (metric + self.root_U * self.kappa * scaled) * self.metric_factor
+        return equilibrium, metric, scaled / self.root_eps, magnitude
+
+    def link(self, W: Ball, G: Ball | None, link: LinkParameters):
+        """The four bounds for one link's ``w = W A delta + G(delta) e`` (pairs, (2, cells))."""
+        return self._combine(
+            link_bound(self.inverse, W, G, link),
+            link_bound(self.to_metric, W, G, link),
+            link_bound(self.law.inverse_factor, W, G, link),
+            link_bound(self.identity, W, G, link),
+        )
+
+    def vector(self, x: np.ndarray):
+        """The four bounds for any ``w`` with ``|w_i| <= x_i`` (pairs with no tube part)."""
+        column = x[..., None]
+
+        def bound(X):
+            value = column_norm(np.abs(X) @ column)[:, 0]
+            return np.stack([value, np.zeros_like(value)])
+
+        return self._combine(
+            bound(self.inverse), bound(self.to_metric), bound(self.law.inverse_factor),
+            bound(self.identity),
+        )  # fmt: skip
+
+
+class CenteredCoriolis:
+    """The Christoffel matrix ``C(q, v; pi)`` over boxes of ``q``, ``v`` and ``pi`` in a form
+    that keeps the structure of each term for norms ``sup ||P C P^T||``: ``C`` is linear in ``v``
+    and in ``pi``, so with ``v = v_c + dv``, ``pi = pi_c + dpi``::
+
+        C = C(q; v_c, pi_c) + sum_k dv_k C(q; e_k, pi_c) + sum_j dpi_j C(q; v_c, e_j)
+            + sum_kj dv_k dpi_j C(q; e_k, e_j)
+
+    each term enclosed over the box of ``q`` alone (``|dv_k|``, ``|dpi_j|`` at most the boxes'
+    radii), its centre through ``P`` exactly and its (first-order in ``q``) radius with absolute
+    values."""
+
+    def __init__(self, regressor: BallRegressor, q: Ball, v: Ball, parameters: Ball):
+        n = regressor.dof
+        cells = q.mid.shape[0]
+        v_center, pi_center = Ball.point(v.mid), Ball.point(parameters.mid)
+        self.v_rad = v.rad
+        free = np.flatnonzero(parameters.rad > 0)
+        self.pi_rad = parameters.rad[free]
+        directions = np.zeros((len(free), parameters.mid.shape[0]))
+        directions[np.arange(len(free)), free] = 1.0
+        units = Ball.point(np.broadcast_to(np.eye(n), (cells, n, n)))
+        q_each = q.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n)))
+        self.center = regressor.coriolis_matrices(q, v_center, pi_center[None])[:, 0]
+        self.per_velocity = regressor.coriolis_matrices(q_each, units, pi_center[None])[:, :, 0]
+        self.per_parameter = self.per_both = None
+        if len(free):
+            self.per_parameter = regressor.coriolis_matrices(q, v_center, directions)
+            self.per_both = regressor.coriolis_matrices(q_each, units, directions)  # (c,k,j,n,n)
+
+    def norm(self, P: np.ndarray) -> np.ndarray:
+        """``sup ||P C P^T||_2`` per cell over the boxes (``P``: (cells, n, n))."""
+        Pt = np.swapaxes(P, -1, -2)
+        absolute, absolute_t = np.abs(P), np.abs(Pt)
+
+        def structured(X: Ball) -> np.ndarray:
+            extra = X.mid.ndim - 3
+            index = (slice(None),) + (None,) * extra
+            A, At, B, Bt = P[index], Pt[index], absolute[index], absolute_t[index]
+            return spectral_norm(A @ X.mid @ At) + spectral_norm(B @ X.rad @ Bt)
+
+        bound = structured(self.center)
+        bound = bound + np.sum(self.v_rad * structured(self.per_velocity), axis=-1)
+        if self.per_parameter is not None:
+            bound = bound + structured(self.per_parameter) @ self.pi_rad
+            both = structured(self.per_both) @ self.pi_rad  # (cells, k)
+            bound = bound + np.sum(self.v_rad * both, axis=-1)
+        return bound * (1 + LAPACK_MARGIN)
+
+
+def congruence(P: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """``P A P^T`` per cell."""
+    return P @ A @ np.swapaxes(P, -1, -2)
+
+
+def safe_cholesky(center: np.ndarray, valid: np.ndarray) -> np.ndarray:
+    safe = np.where(valid[..., None, None], center, np.eye(center.shape[-1]))
+    return np.linalg.cholesky(safe)
+
+
+def plant_hull(robot, box: ParameterBox) -> Ball:
+    """The standard parameters of the joint bodies over the box (nominal plus each uncertain
+    link's barycentric enclosure placed into its body), a ball ``(10 dof,)``."""
+    lower = parameters_of(robot).copy()
+    upper = lower.copy()
+    for link_box in box.uncertain_links:
+        body, A = link_body_placement(robot, link_box.link)
+        lo, hi = barycentric_enclosure(link_box)
+        nominal = link_box.standard_parameters(link_box.nominal)
+        mid, rad = A @ (0.5 * (lo + hi) - nominal), np.abs(A) @ (0.5 * (hi - lo))
+        rad = rad * (1 + 1e-12) + 1e-15 * (np.abs(mid) + np.abs(A) @ np.abs(nominal))
+        columns = slice(10 * body, 10 * body + 10)
+        lower[columns] += mid - rad
+        upper[columns] += mid + rad
+    return Ball.hull(lower, upper)
+
+
+#: At most this many coordinates of a link's parameter box are enumerated at their vertices;
+#: the others enter by the triangle inequality (sound either way; cost 2^VERTEX_COORDINATES).
+VERTEX_COORDINATES = 5
+
+
+@dataclasses.dataclass(frozen=True)
+class LinkParameters:
+    """Where a link enters ``Y_SL`` and its barycentric hull relative to the nominal:
+    ``delta = mid + rad * s``, ``s in [-1, 1]^10`` (link frame; ``A`` places it in its body)."""
+
+    columns: slice
+    A: np.ndarray
+    mid: np.ndarray
+    rad: np.ndarray
+
+
+def link_parameters(robot, box) -> LinkParameters:
+    body, A = link_body_placement(robot, box.link)
+    lower, upper = barycentric_enclosure(box)
+    nominal = box.standard_parameters(box.nominal)
+    mid = 0.5 * (lower + upper) - nominal
+    rad = (0.5 * (upper - lower)) * (1 + 1e-12) + 1e-15 * (np.abs(mid) + np.abs(nominal))
+    rad[upper == lower] = 0.0
+    return LinkParameters(slice(10 * body, 10 * body + 10), A, mid, rad)
+
+
+def link_bound(X: np.ndarray, W: Ball, G: Ball | None, link: LinkParameters) -> np.ndarray:
+    """Per cell, ``(c, g)`` with ``||X w|| <= c + rho g`` over ``w = W A delta + G(delta) e`` for
+    every ``delta`` of the link's box, every ``W``, ``G`` in their balls and ``||e|| <= rho``
+    (``X``: (cells, m, n); ``W``: (cells, n, 10); ``G``: (cells, k, n, 10), the Jacobian along the
+    tube, enclosed over a tube at least as wide as ``rho``). Shape (2, cells).
+
+    ``||X W A delta||`` is convex in ``delta``: its maximum over the box is at a vertex. The
+    :data:`VERTEX_COORDINATES` coordinates that move it most are enumerated at their vertices,
+    the others enter by the triangle inequality (``rad_j ||X W A e_j||``); the radii of the balls
+    enter with ``|delta| <= |mid| + rad``."""
+    XW = X @ (W.mid @ link.A)  # (cells, m, 10)
+    column_norms = column_norm(XW)  # (cells, 10)
+    score = np.max(column_norms, axis=0) * link.rad
+    free = np.flatnonzero(link.rad > 0)
+    chosen = free[np.argsort(score[free])[::-1][:VERTEX_COORDINATES]]
+    rest = np.setdiff1d(free, chosen)
+    corners = np.array(np.meshgrid(*[(-1.0, 1.0)] * len(chosen), indexing="ij")).reshape(
+        len(chosen), -1
+    )
+    vertices = np.repeat(link.mid[:, None], corners.shape[1], axis=1)
+    vertices[chosen] += link.rad[chosen, None] * corners
+    bound = column_norm(XW @ vertices).max(-1) + column_norms[:, rest] @ link.rad[rest]
+    magnitude = np.abs(link.mid) + link.rad
+    absolute = np.abs(X)
+    radius = (W.rad + 40 * 2.0**-53 * np.abs(W.mid)) @ (np.abs(link.A) @ magnitude)  # (cells, n)
+    bound = bound + column_norm(absolute @ radius[..., None])[:, 0]
+    per_tube = np.zeros_like(bound)
+    if G is not None:
+        XG = X[:, None] @ (G.mid @ link.A)  # (cells, k, m, 10)
+        spectral = spectral_norm(np.moveaxis(XG, -1, 1))  # (cells, 10): ||X G_j||_2
+        triangle = spectral @ magnitude
+        # Frobenius norm of X G(delta) at the enumerated vertices (a quadratic form in delta).
+        H = np.einsum("ckmj,ckml->cjl", XG, XG)
+        quadratic = np.einsum("cjl,jv,lv->cv", H, vertices, vertices)
+        frobenius = np.sqrt(np.maximum(quadratic, 0.0)).max(-1) * (1 + 1e-10)
+        frobenius = frobenius + spectral[:, rest] @ link.rad[rest]
+        spread = (G.rad + 40 * 2.0**-53 * np.abs(G.mid)) @ (np.abs(link.A) @ magnitude)
+        spread = np.sqrt(np.sum(spread * spread, axis=1))  # (cells, n)
+        per_tube = np.minimum(triangle, frobenius) + column_norm(absolute @ spread[..., None])[:, 0]
+    return np.stack([bound, per_tube]) * (1 + 1e-10)
