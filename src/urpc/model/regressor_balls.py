@@ -33,222 +33,23 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UrpcError
+from .ball_arithmetic import (
+    Ball,
+    Jet,
+    concatenate,
+    cos_sin,
+    cross,
+    intersect_symmetric,
+    matmul,
+    matvec,
+    skew,
+    stack,
+    transposed,
+    zeros,
+)
 from .robot import Robot
 
-#: Unit roundoff of IEEE double precision.
-U = 2.0**-53
-#: Factor that keeps a radius computed in rounded arithmetic above its exact value.
-UP = 1.0 + 8 * U
-
-
-# ============================================================================ balls
-@dataclass(frozen=True)
-class Ball:
-    """An array of balls ``[mid - rad, mid + rad]`` (same shapes, ``rad >= 0``)."""
-
-    mid: np.ndarray
-    rad: np.ndarray
-
-    @staticmethod
-    def point(x) -> Ball:
-        x = np.asarray(x, dtype=float)
-        return Ball(x, np.zeros_like(x))
-
-    @staticmethod
-    def hull(lower, upper) -> Ball:
-        """A ball containing ``[lower, upper]`` (widened for the rounding of its midpoint)."""
-        lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
-        mid = 0.5 * (lower + upper)
-        rad = np.maximum(upper - mid, mid - lower) * UP + 2 * U * np.abs(mid)
-        return Ball(mid, rad)
-
-    @property
-    def lower(self) -> np.ndarray:
-        return self.mid - self.rad
-
-    @property
-    def upper(self) -> np.ndarray:
-        return self.mid + self.rad
-
-    @property
-    def magnitude(self) -> np.ndarray:
-        """``max |x|`` over the ball (rounded up)."""
-        return (np.abs(self.mid) + self.rad) * UP
-
-    def __add__(self, other):
-        if isinstance(other, Jet):
-            return Jet.of(self) + other
-        mid = self.mid + other.mid
-        return Ball(mid, (self.rad + other.rad + 2 * U * np.abs(mid)) * UP)
-
-    def __sub__(self, other):
-        if isinstance(other, Jet):
-            return Jet.of(self) - other
-        mid = self.mid - other.mid
-        return Ball(mid, (self.rad + other.rad + 2 * U * np.abs(mid)) * UP)
-
-    def __neg__(self) -> Ball:
-        return Ball(-self.mid, self.rad)
-
-    def scaled(self, factor: float) -> Ball:
-        """Times an exact scalar."""
-        mid = self.mid * factor
-        return Ball(mid, (self.rad * abs(factor) + 2 * U * np.abs(mid)) * UP)
-
-    def __mul__(self, other):
-        """Elementwise product (broadcasting)."""
-        if isinstance(other, Jet):
-            return Jet.of(self) * other
-        mid = self.mid * other.mid
-        rad = (
-            np.abs(self.mid) * other.rad
-            + self.rad * np.abs(other.mid)
-            + self.rad * other.rad
-            + 2 * U * np.abs(mid)
-        )
-        return Ball(mid, rad * UP)
-
-    def __getitem__(self, index) -> Ball:
-        return Ball(self.mid[index], self.rad[index])
-
-    def map(self, function) -> Ball:
-        """A structural operation (reshape, transpose, broadcast) on both arrays."""
-        return Ball(function(self.mid), function(self.rad))
-
-    @property
-    def shape(self) -> tuple[int, ...]:
-        return self.mid.shape
-
-
-@dataclass(frozen=True)
-class Jet:
-    """A ball of values and a ball of their time derivatives (forward-mode differentiation)."""
-
-    val: Ball
-    dot: Ball
-
-    @staticmethod
-    def of(x) -> Jet:
-        if isinstance(x, Jet):
-            return x
-        return Jet(x, Ball.point(np.zeros_like(x.mid)))
-
-    def __add__(self, other) -> Jet:
-        other = Jet.of(other)
-        return Jet(self.val + other.val, self.dot + other.dot)
-
-    __radd__ = __add__
-
-    def __sub__(self, other) -> Jet:
-        other = Jet.of(other)
-        return Jet(self.val - other.val, self.dot - other.dot)
-
-    def __neg__(self) -> Jet:
-        return Jet(-self.val, -self.dot)
-
-    def scaled(self, factor: float) -> Jet:
-        return Jet(self.val.scaled(factor), self.dot.scaled(factor))
-
-    def __mul__(self, other) -> Jet:
-        other = Jet.of(other)
-        return Jet(self.val * other.val, self.dot * other.val + self.val * other.dot)
-
-    __rmul__ = __mul__
-
-    def __getitem__(self, index) -> Jet:
-        return Jet(self.val[index], self.dot[index])
-
-    def map(self, function) -> Jet:
-        return Jet(self.val.map(function), self.dot.map(function))
-
-    @property
-    def shape(self) -> tuple[int, ...]:
-        return self.val.shape
-
-
-def matmul(A, B):
-    """``A @ B`` on balls or jets (numpy's batched matrix product)."""
-    if isinstance(A, Jet) or isinstance(B, Jet):
-        A, B = Jet.of(A), Jet.of(B)
-        return Jet(matmul(A.val, B.val), matmul(A.dot, B.val) + matmul(A.val, B.dot))
-    terms = A.mid.shape[-1]
-    absA = np.abs(A.mid)
-    mid = A.mid @ B.mid
-    rad = absA @ B.rad + A.rad @ (np.abs(B.mid) + B.rad) + (terms + 2) * U * (absA @ np.abs(B.mid))
-    return Ball(mid, rad * UP)
-
-
-def matvec(A, x):
-    """``A x`` for matrices ``(..., i, k)`` and vectors ``(..., k)``."""
-    return matmul(A, x.map(lambda a: a[..., None])).map(lambda a: a[..., 0])
-
-
-def transposed(A):
-    return A.map(lambda a: np.swapaxes(a, -1, -2))
-
-
-def skew(x):
-    """``S(x)`` with ``S(x) y = x cross y``: shape ``(..., 3) -> (..., 3, 3)``."""
-    if isinstance(x, Jet):
-        return Jet(skew(x.val), skew(x.dot))
-
-    def build(v):
-        a, b, c = v[..., 0], v[..., 1], v[..., 2]
-        z = np.zeros_like(a)
-        return np.stack(
-            [np.stack([z, -c, b], -1), np.stack([c, z, -a], -1), np.stack([-b, a, z], -1)], -2
-        )
-
-    return Ball(build(x.mid), np.abs(build(x.rad)))
-
-
-def cross(a, b):
-    """``a x b`` of 3-vectors."""
-    return matvec(skew(a), b)
-
-
-def concatenate(parts, axis: int):
-    if any(isinstance(p, Jet) for p in parts):
-        parts = [Jet.of(p) for p in parts]
-        return Jet(
-            concatenate([p.val for p in parts], axis), concatenate([p.dot for p in parts], axis)
-        )
-    return Ball(
-        np.concatenate([p.mid for p in parts], axis), np.concatenate([p.rad for p in parts], axis)
-    )
-
-
-def stack(parts, axis: int):
-    if any(isinstance(p, Jet) for p in parts):
-        parts = [Jet.of(p) for p in parts]
-        return Jet(stack([p.val for p in parts], axis), stack([p.dot for p in parts], axis))
-    return Ball(np.stack([p.mid for p in parts], axis), np.stack([p.rad for p in parts], axis))
-
-
-def zeros(shape) -> Ball:
-    return Ball.point(np.zeros(shape))
-
-
-def cos_sin(q):
-    """``cos q``, ``sin q`` over a ball (or jet) of angles [rad]."""
-    if isinstance(q, Jet):
-        c, s = cos_sin(q.val)
-        return Jet(c, -(s * q.dot)), Jet(s, c * q.dot)
-    c, s = np.cos(q.mid), np.sin(q.mid)
-    reach = np.minimum(2.0, 0.5 * q.rad * q.rad * UP)
-    library = 4 * U  # two ulps of the library's rounding at magnitudes <= 1
-    cos = Ball(c, np.minimum(2.0, (np.abs(s) * q.rad + reach) * UP) + library)
-    sin = Ball(s, np.minimum(2.0, (np.abs(c) * q.rad + reach) * UP) + library)
-    return cos, sin
-
-
-def intersect_symmetric(M):
-    """A symmetric matrix's two enclosures of each off-diagonal entry, intersected."""
-    if isinstance(M, Jet):
-        return Jet(intersect_symmetric(M.val), intersect_symmetric(M.dot))
-    lower = np.maximum(M.lower, np.swapaxes(M.lower, -1, -2))
-    upper = np.minimum(M.upper, np.swapaxes(M.upper, -1, -2))
-    return Ball.hull(lower, upper)
+__all__ = ["Ball", "BallRegressor", "Jet", "matvec", "parameters_of"]
 
 
 # ============================================================================ the recursion
