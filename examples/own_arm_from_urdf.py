@@ -9,15 +9,15 @@ disturbance bound is unknown). ``urpc init ROBOT --out box.yaml`` writes a start
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 from _settings import duration
 
 import urpc
+from urpc.model.catalog import resolve_robot
 
-#: Any fixed-base serial chain; this one ships with urpc (the paper's planar RR arm).
-URDF = Path(urpc.__file__).parents[2] / "robots" / "rr_planar" / "rr_planar.urdf"
+#: Any fixed-base serial chain's URDF file; this one ships with urpc (the paper's planar RR arm),
+#: found where pip installed it (editable or not).
+URDF = resolve_robot("rr_planar").urdf
 
 robot = urpc.load_robot(str(URDF))
 box = urpc.parse_uncertainty(
