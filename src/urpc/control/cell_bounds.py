@@ -159,28 +159,31 @@ class CenteredCoriolis:
 
     each term enclosed over the box of ``q`` alone (``|dv_k|``, ``|dpi_j|`` at most the boxes'
     radii), its centre through ``P`` exactly and its (first-order in ``q``) radius with absolute
-    values."""
+    values. The bound is affine in the velocity radii: :meth:`coefficients` gives ``(A, B)`` with
+    ``sup ||P C P^T|| <= A + B dv`` for every velocity box of centre ``v_c`` and radii ``dv``, so
+    that a wider velocity box (a larger ``r_max``) costs no new enclosure."""
 
-    def __init__(self, regressor: BallRegressor, q: Ball, v: Ball, parameters: Ball):
+    def __init__(self, regressor: BallRegressor, q: Ball, v_center: np.ndarray, parameters: Ball):
         n = regressor.dof
         cells = q.mid.shape[0]
-        v_center, pi_center = Ball.point(v.mid), Ball.point(parameters.mid)
-        self.v_rad = v.rad
+        pi_center = Ball.point(parameters.mid)
         free = np.flatnonzero(parameters.rad > 0)
         self.pi_rad = parameters.rad[free]
         directions = np.zeros((len(free), parameters.mid.shape[0]))
         directions[np.arange(len(free)), free] = 1.0
         units = Ball.point(np.broadcast_to(np.eye(n), (cells, n, n)))
         q_each = q.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n)))
-        self.center = regressor.coriolis_matrices(q, v_center, pi_center[None])[:, 0]
+        v_point = Ball.point(v_center)
+        self.center = regressor.coriolis_matrices(q, v_point, pi_center[None])[:, 0]
         self.per_velocity = regressor.coriolis_matrices(q_each, units, pi_center[None])[:, :, 0]
         self.per_parameter = self.per_both = None
         if len(free):
-            self.per_parameter = regressor.coriolis_matrices(q, v_center, directions)
+            self.per_parameter = regressor.coriolis_matrices(q, v_point, directions)
             self.per_both = regressor.coriolis_matrices(q_each, units, directions)  # (c,k,j,n,n)
 
-    def norm(self, P: np.ndarray) -> np.ndarray:
-        """``sup ||P C P^T||_2`` per cell over the boxes (``P``: (cells, n, n))."""
+    def coefficients(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(A, B)``, shapes (cells,) and (cells, n): ``sup ||P C P^T||_2 <= A + B dv`` per cell
+        over the boxes (``P``: (cells, n, n); ``dv``: the velocity radii, (cells, n))."""
         Pt = np.swapaxes(P, -1, -2)
         absolute, absolute_t = np.abs(P), np.abs(Pt)
 
@@ -190,13 +193,12 @@ class CenteredCoriolis:
             A, At, B, Bt = P[index], Pt[index], absolute[index], absolute_t[index]
             return spectral_norm(A @ X.mid @ At) + spectral_norm(B @ X.rad @ Bt)
 
-        bound = structured(self.center)
-        bound = bound + np.sum(self.v_rad * structured(self.per_velocity), axis=-1)
+        constant = structured(self.center)
+        per_velocity = structured(self.per_velocity)
         if self.per_parameter is not None:
-            bound = bound + structured(self.per_parameter) @ self.pi_rad
-            both = structured(self.per_both) @ self.pi_rad  # (cells, k)
-            bound = bound + np.sum(self.v_rad * both, axis=-1)
-        return bound * (1 + LAPACK_MARGIN)
+            constant = constant + structured(self.per_parameter) @ self.pi_rad
+            per_velocity = per_velocity + structured(self.per_both) @ self.pi_rad  # (cells, k)
+        return constant * (1 + LAPACK_MARGIN), per_velocity * (1 + LAPACK_MARGIN)
 
 
 def congruence(P: np.ndarray, A: np.ndarray) -> np.ndarray:

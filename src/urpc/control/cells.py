@@ -92,6 +92,7 @@ class CellFloor:
         self._links = [[link_parameters(robot, b) for b in p.uncertain_links] for p in self.pieces]
         self._plant_hull = plant_hull(robot, box)
         self._cache: dict[tuple, dict] = {}
+        self._tube_cache: dict[tuple, dict] = {}
 
     # ------------------------------------------------------------------------- cell boxes
     def _states(self, tube: float, r_max: float, extension: float, along_reference=False):
@@ -117,28 +118,77 @@ class CellFloor:
 
     def quantities(self, tube: float, r_max: float, extension: float) -> dict:
         """Every cell's enclosures for the tube ``||e|| <= tube``, ``||r|| <= r_max`` [rad, rad/s],
-        cells widened by ``extension`` [s] (cached)."""
+        cells widened by ``extension`` [s] (cached). The enclosures over the tube
+        (:meth:`_tube_enclosures`, the costly part) do not depend on ``r_max``: only the plant's
+        velocity box and the rates do, and they enter affinely, so a new ``r_max`` costs a
+        recombination only."""
         key = (round(tube, 15), round(r_max, 12), round(extension, 15))
         if key in self._cache:
             return self._cache[key]
-        cells = self.cells
-        q, qd_a, qdd_a, velocity = self._states(tube, r_max, extension)
-        models, model_slopes = self._inertia_models(q.val)
-        nominal, law = models[0], models[1]
+        enclosed = self._tube_enclosures(tube, extension)
+        _, qd_a, qdd_a, velocity = self._states(tube, r_max, extension)
+        speed = velocity.magnitude  # |qd| over the plant's velocity box
+        law = enclosed["law"]
         # ||M_L^-1/2 dM_L/dt M_L^-1/2|| <= sum_k |qd_k| s_k / (1 - eps), qd the plant's velocity.
-        law_rate_norm = np.sum(velocity.magnitude * model_slopes[1], axis=-1) / (
+        law_rate_norm = np.sum(speed * enclosed["law_slopes"], axis=-1) / (
             1 - np.minimum(law.eps, 0.999999)
         )
+        # Drives: smooth terms per component (values and rates), and the drive torque's rate.
+        drive, drive_rate = self._drive_terms(qd_a, qdd_a)
+        torque_rate_max = enclosed["torque_rate"] + self._drive_torque_rate(qd_a, qdd_a)
+        out = dict(enclosed["global"], r_max=float(r_max), mu_law=law_rate_norm, pieces=[])
+        for piece in enclosed["pieces"]:
+            metrics = piece["metrics"]
+            R, RM, Rs, V = piece["R"], piece["RM"], piece["Rs"], piece["V"]
+            Rdot, Vdot = piece["Rdot"], piece["Vdot"]
+            if drive is not None:
+                equilibrium, metric, scaled, magnitude = metrics.vector(drive)
+                R, RM, Rs, V = R + equilibrium, RM + metric, Rs + scaled, V + magnitude
+                equilibrium, _, _, magnitude = metrics.vector(drive_rate)
+                Rdot, Vdot = Rdot + equilibrium, Vdot + magnitude
+            # Rate of the nominal torque (the held torque lags it), in both metrics.
+            lag, lag_M = (x[0] for x in metrics.vector(torque_rate_max)[:2])
+            # d/dt (M_L^-1 w) = M_L^-1 (dw/dt) - M_L^-1 (dM_L/dt) M_L^-1 w.
+            lam_law = np.maximum(out["law_lam_L"], 1e-300)
+            inverse_change = law_rate_norm / np.sqrt(lam_law)
+            # The plant's C on r over the velocity box (affine in its radii), in M_L's metric.
+            constant, per_velocity = piece["coriolis_coefficients"]
+            gamma = (constant + np.sum(per_velocity * velocity.rad, axis=-1)) * piece["to_lower"]
+            gamma = gamma * (1 + LAPACK_MARGIN)
+            metric_rate = 2.0 * gamma  # ||M^-1/2 (C + C^T) M^-1/2|| <= 2 ||M^-1/2 C M^-1/2||
+            out["pieces"].append(
+                dict(
+                    piece["static"],
+                    R=R, RM=RM, V=V, Rs=Rs,
+                    rate_inverse=Rdot[0], inverse_change=inverse_change, rate=Vdot[0],
+                    lag=lag, lag_M=lag_M,
+                    coriolis=gamma + piece["gamma_delta"], metric_rate=metric_rate,
+                )
+            )  # fmt: skip
+        self._cache[key] = out
+        return out
+
+    def _tube_enclosures(self, tube: float, extension: float) -> dict:
+        """The enclosures over the tube ``||e|| <= tube`` that do not depend on ``r_max``
+        (cached): inertia models, the mismatch and its rate along the reference, the Coriolis
+        terms as coefficients of the velocity radii."""
+        key = (round(tube, 15), round(extension, 15))
+        if key in self._tube_cache:
+            return self._tube_cache[key]
+        cells = self.cells
+        q, qd_a, _, _ = self._states(tube, 0.0, extension)
+        models, model_slopes = self._inertia_models(q.val)
+        nominal, law = models[0], models[1]
         # d/dt w = (rate along the reference at a fixed e) + (Jacobian along e) ed.
-        reference = self._states(tube, r_max, extension, along_reference=True)
+        reference = self._states(tube, 0.0, extension, along_reference=True)
         Y = self.regressor.slotine_li(reference[0], reference[1], reference[1], reference[2])
-        center, tube_jacobian = self._mismatch_parts(tube, r_max, extension)
+        center, tube_jacobian = self._mismatch_parts(tube, extension)
         hull = self._plant_hull
         mismatch = Ball(hull.mid - self._parameters[0], hull.rad)
-        # The plant's Coriolis matrix (every plant of the box, the plant's velocity) and the
-        # Coriolis mismatch along qd_a, as centered forms (their norms in each piece's metric).
-        coriolis = CenteredCoriolis(self.regressor, q.val, velocity, hull)
-        coriolis_mismatch = CenteredCoriolis(self.regressor, q.val, qd_a.val, mismatch)
+        # The plant's Coriolis matrix (every plant of the box, over the plant's velocity box,
+        # affine in its radii) and the Coriolis mismatch along qd_a, as centered forms.
+        coriolis = CenteredCoriolis(self.regressor, q.val, q.dot.mid, hull)
+        coriolis_mismatch = CenteredCoriolis(self.regressor, q.val, qd_a.val.mid, mismatch)
         # d/dt of the nominal torque Y_SL pi0 (held over the period while the reference moves).
         pi0 = Ball.point(self._parameters[0])
         torque_rate = matvec(Y.dot, pi0)
@@ -147,28 +197,27 @@ class CellFloor:
         torque_per_error_rate = np.sqrt(
             np.sum((np.abs(along_error.mid) + along_error.rad) ** 2, axis=1)
         )
-        # Drives: smooth terms per component (values and rates), and the drive torque's rate.
-        drive, drive_rate = self._drive_terms(qd_a, qdd_a)
-        torque_rate_max = (
-            np.abs(torque_rate.mid) + torque_rate.rad + self._drive_torque_rate(qd_a, qdd_a)
-        )
-        out = {
-            "tube": float(tube),
-            "r_max": float(r_max),
-            "valid": nominal.valid & law.valid,
-            "trace_inverse": np.trace(law.inverse, axis1=-2, axis2=-1)
-            / (1 - np.minimum(law.eps, 0.999999))
-            * (1 + LAPACK_MARGIN),
-            "law_lam_L": law.lam_min * (1 - law.eps) * (1 - LAPACK_MARGIN),
-            "mu_law": law_rate_norm,
-            "law_inverse_diagonal": np.diagonal(law.inverse, axis1=-2, axis2=-1),
+        enclosed = {
+            "law": law,
+            "law_slopes": model_slopes[1],
+            "torque_rate": np.abs(torque_rate.mid) + torque_rate.rad,
+            "global": {
+                "tube": float(tube),
+                "valid": nominal.valid & law.valid,
+                "trace_inverse": np.trace(law.inverse, axis1=-2, axis2=-1)
+                / (1 - np.minimum(law.eps, 0.999999))
+                * (1 + LAPACK_MARGIN),
+                "law_lam_L": law.lam_min * (1 - law.eps) * (1 - LAPACK_MARGIN),
+                "law_inverse_diagonal": np.diagonal(law.inverse, axis1=-2, axis2=-1),
+            },
             "pieces": [],
         }
+        valid_global = enclosed["global"]["valid"]
         for k, links in enumerate(self._links):
             lower, upper = models[2 + 2 * k], models[3 + 2 * k]
             lam_L = np.maximum(lower.lam_min * (1 - lower.eps), 0.0) * (1 - LAPACK_MARGIN)
             lam_U = upper.lam_max * (1 + upper.eps) * (1 + LAPACK_MARGIN)
-            valid = lower.valid & upper.valid & out["valid"]
+            valid = lower.valid & upper.valid & valid_global
             # Generalized eigenvalues through the Cholesky factors: lambda(A, B) = lambda(P A P^T).
             generalized = np.linalg.eigvalsh(congruence(upper.inverse_factor, law.center))[:, 0]
             low = np.linalg.eigvalsh(congruence(upper.inverse_factor, nominal.center))[:, 0]
@@ -195,48 +244,28 @@ class CellFloor:
                 # Rate along the reference at a fixed error, over the whole box.
                 equilibrium, _, _, magnitude = metrics.link(Y.dot[..., columns], None, link)
                 Rdot, Vdot = Rdot + equilibrium, Vdot + magnitude
-            if drive is not None:
-                equilibrium, metric, scaled, magnitude = metrics.vector(drive)
-                R, RM, Rs, V = R + equilibrium, RM + metric, Rs + scaled, V + magnitude
-                equilibrium, _, _, magnitude = metrics.vector(drive_rate)
-                Rdot, Vdot = Rdot + equilibrium, Vdot + magnitude
-            # Rate of the nominal torque (the held torque lags it), in both metrics.
-            lag, lag_M = (x[0] for x in metrics.vector(torque_rate_max)[:2])
             lag_e, lag_M_e = (x[0] for x in metrics.vector(torque_per_error_rate)[:2])
-            # d/dt (M_L^-1 w) = M_L^-1 (dw/dt) - M_L^-1 (dM_L/dt) M_L^-1 w.
-            lam_law = np.maximum(out["law_lam_L"], 1e-300)
-            inverse_change = out["mu_law"] / np.sqrt(lam_law)
             to_lower = 1.0 / (1 - np.minimum(lower.eps, 0.999999)) * (1 + LAPACK_MARGIN)
-            gamma = coriolis.norm(lower.inverse_factor) * to_lower  # the plant's C on r
-            gamma_delta = coriolis_mismatch.norm(lower.inverse_factor) * to_lower
-            metric_rate = 2.0 * gamma  # ||M^-1/2 (C + C^T) M^-1/2|| <= 2 ||M^-1/2 C M^-1/2||
+            constant, per_velocity = coriolis_mismatch.coefficients(lower.inverse_factor)
+            gamma_delta = (constant + np.sum(per_velocity * qd_a.val.rad, axis=-1)) * to_lower
             uniform = np.ptp(self.Kr) == 0
             K = self.Kr.max() * (1.0 if uniform else np.sqrt(lam_U / np.maximum(lam_L, 1e-300)))
-            out["pieces"].append(
+            enclosed["pieces"].append(
                 {
-                    "valid": valid & (lam_L > 0) & (beta > 0),
-                    "lam_L": lam_L,
-                    "lam_U": lam_U,
-                    "beta": beta,
-                    "nu": nu,
-                    "K": K,
-                    "R": R,
-                    "RM": RM,
-                    "V": V,
-                    "Rs": Rs,
-                    "rate_inverse": Rdot[0],
-                    "inverse_change": inverse_change,
-                    "rate": Vdot[0],
-                    "lag": lag,
-                    "lag_M": lag_M,
-                    "lag_e": lag_e,
-                    "lag_M_e": lag_M_e,
-                    "coriolis": gamma + gamma_delta,
-                    "metric_rate": metric_rate,
+                    "metrics": metrics,
+                    "R": R, "RM": RM, "Rs": Rs, "V": V, "Rdot": Rdot, "Vdot": Vdot,
+                    "coriolis_coefficients": coriolis.coefficients(lower.inverse_factor),
+                    "to_lower": to_lower,
+                    "gamma_delta": gamma_delta * (1 + LAPACK_MARGIN),
+                    "static": {
+                        "valid": valid & (lam_L > 0) & (beta > 0),
+                        "lam_L": lam_L, "lam_U": lam_U, "beta": beta, "nu": nu, "K": K,
+                        "lag_e": lag_e, "lag_M_e": lag_M_e,
+                    },
                 }
-            )
-        self._cache[key] = out
-        return out
+            )  # fmt: skip
+        self._tube_cache[key] = enclosed
+        return enclosed
 
     def inertia_figures(self, extension: float) -> dict[str, float]:
         """Only ``lambda_L`` (the lightest mode of every piece's lower bound) and ``lambda_U``
@@ -255,7 +284,7 @@ class CellFloor:
         """Every inertia model (nominal, the law's ``M_L``, each piece's ``M_L`` and ``M_U``) over
         the boxes of ``q``: its value at each cell's centre and its derivatives in ``q`` over the
         whole box (:func:`inertia_model`), with the slopes ``s_k`` for its rates."""
-        n, cells = self.dof, self.cells
+        n, cells = self.dof, q.mid.shape[0]
         centers = self.regressor.mass_matrices(Ball.point(q.mid), self._parameters)
         diagonal = np.einsum("pi,ij->pij", self._armature, np.eye(n))
         centers = Ball(centers.mid + diagonal, centers.rad)  # (cells, P, n, n)
@@ -270,14 +299,14 @@ class CellFloor:
         ]
         return [model for model, _ in pairs], [slope for _, slope in pairs]
 
-    def _mismatch_parts(self, tube: float, r_max: float, extension: float):
+    def _mismatch_parts(self, tube: float, extension: float):
         """``Y_SL`` over each cell of the reference at ``e = 0`` (a ball), and its Jacobian along
         each error direction ``e_k`` over the whole tube (a ball, (cells, k, n, 10 n)): at
         ``r = 0`` the state is ``(q_d - e, qd_d + Kr e, qd_d + Kr e, qdd_d - Kr^2 e)``, so that
         ``w(t, e) = w(t, 0) + sum_k e_k dw/de_k(xi)`` for some ``xi`` in the tube."""
-        q0, qd0, qdd0, _ = self._states(0.0, r_max, extension)
+        q0, qd0, qdd0, _ = self._states(0.0, 0.0, extension)
         center = self.regressor.slotine_li(q0.val, qd0.val, qd0.val, qdd0.val)
-        q, qd_a, qdd_a, _ = self._states(tube, r_max, extension)
+        q, qd_a, qdd_a, _ = self._states(tube, 0.0, extension)
         n, Kr = self.dof, self.Kr
         eye = np.eye(n)
 
@@ -341,7 +370,8 @@ class CellFloor:
                 break
         return worst, parts
 
-    def _piece_floor(self, T, d, D, q: dict, p: dict, tube: float) -> tuple[float, dict]:
+    def _cell_terms(self, T, d, D, q: dict, p: dict, tube: float) -> dict[str, np.ndarray]:
+        """The per-cell terms of the floor for one piece (the floor takes their extremes)."""
         n = self.dof
         R, RM, V, Rs = (p[name][0] + tube * p[name][1] for name in ("R", "RM", "V", "Rs"))
         # ||ed|| <= ||r|| + Kr ||e|| moves w along the tube's Jacobian.
@@ -350,48 +380,65 @@ class CellFloor:
         rate = p["rate"] + error_rate * p["V"][1]
         lag = p["lag"] + error_rate * p["lag_e"]
         lag_M = p["lag_M"] + error_rate * p["lag_M_e"]
-        if not np.all(p["valid"]):
-            cell = int(np.flatnonzero(~p["valid"])[0])
-            return math.inf, {"margin": -math.inf, "invalid_cell": cell, "gain_D": D}
         beta, lam_L, lam_U = p["beta"], p["lam_L"], p["lam_U"]
         a = beta * D * T / (D * T + beta * lam_U)
         growth = 0.5 * T * p["metric_rate"]  # the metric M(q) changes within the period
         b = T * (p["K"] * (0.5 + p["nu"]) + p["coriolis"] + self.joints.damping / lam_L) + growth
-        margin_cells = a - b
+        sqrt_L, sqrt_U = np.sqrt(lam_L), np.sqrt(lam_U)
+        equilibrium = T * (R + 0.5 * T * lag) + V / D
+        response = T * d * (q["trace_inverse"] + n / (D * T))
+        forcing = sqrt_U * T * (T * rate_inverse + rate / D) * (1 + growth)
+        equilibrium_M = T * (RM + 0.5 * T * lag_M) + sqrt_U * V / D
+        response_M = T * d / (np.maximum(a, 1e-300) * sqrt_L)
+        return {
+            "valid": p["valid"],
+            "contraction": a,
+            "margin": a - b,
+            "lam_L": lam_L,
+            "equilibrium": equilibrium,
+            "response": response,
+            "slow": equilibrium + response,
+            "forcing": forcing,
+            "pushed": forcing + b * (equilibrium_M + response_M) * (1 + growth),
+            "mismatch": T * R + V / D,
+            "torque_lag": 0.5 * T * T * lag,
+        }
+
+    def _piece_floor(self, T, d, D, q: dict, p: dict, tube: float) -> tuple[float, dict]:
+        if not np.all(p["valid"]):
+            cell = int(np.flatnonzero(~p["valid"])[0])
+            return math.inf, {"margin": -math.inf, "invalid_cell": cell, "gain_D": D}
+        terms = self._cell_terms(T, d, D, q, p, tube)
+        margin_cells = terms["margin"]
         worst_cell = int(np.argmin(margin_cells))
         margin = float(margin_cells[worst_cell])
         parts = {
-            "contraction": float(np.min(a)),
+            "contraction": float(np.min(terms["contraction"])),
             "margin": margin,
             "gain_D": float(D),
             "margin_cell": worst_cell,
         }
         if not margin > 0:
             return math.inf, parts
-        sqrt_L, sqrt_U = np.sqrt(lam_L), np.sqrt(lam_U)
-        equilibrium = T * (R + 0.5 * T * lag) + V / D
-        response = T * d * (q["trace_inverse"] + n / (D * T))
-        forcing = sqrt_U * T * (T * rate_inverse + rate / D) * (1 + growth)
-        equilibrium_M = T * (RM + 0.5 * T * lag_M) + sqrt_U * V / D
-        response_M = T * d / (a * sqrt_L)
-        pushed = forcing + b * (equilibrium_M + response_M) * (1 + growth)
-        deviation = float(np.max(pushed)) / margin
-        slow = equilibrium + response
-        r_sup = float(np.max(slow)) + (deviation + float(np.max(forcing))) / float(sqrt_L.min())
+        sqrt_L_min = float(np.sqrt(terms["lam_L"].min()))
+        forcing_max = float(np.max(terms["forcing"]))
+        deviation = float(np.max(terms["pushed"])) / margin
+        slow = terms["slow"]
+        r_sup = float(np.max(slow)) + (deviation + forcing_max) / sqrt_L_min
         floor = r_sup / float(self.Kr.min())
         # Which term dominates, and where (for the report).
         shares = {
-            "mismatch": float(np.max(T * R + V / D)),
-            "torque_lag": float(np.max(0.5 * T * T * lag)),
-            "disturbance": float(np.max(response)),
-            "deviation": (deviation + float(np.max(forcing))) / float(sqrt_L.min()),
+            "mismatch": float(np.max(terms["mismatch"])),
+            "torque_lag": float(np.max(terms["torque_lag"])),
+            "disturbance": float(np.max(terms["response"])),
+            "deviation": (deviation + forcing_max) / sqrt_L_min,
         }
         parts.update(
             r_sup=r_sup,
-            r_equilibrium=float(np.max(equilibrium)),
+            r_equilibrium=float(np.max(terms["equilibrium"])),
             shares=shares,
             slow_cell=int(np.argmax(slow)),
-            lambda_L_min=float(lam_L.min()),
+            lambda_L_min=float(terms["lam_L"].min()),
         )
         return floor, parts
 
@@ -407,6 +454,7 @@ class CellFloor:
         }
 
     def cell_time(self, cell: int) -> tuple[float, float]:
+        """The time span [s] of a cell (before its widening)."""
         return float(self.edges[cell]), float(self.edges[cell + 1])
 
 

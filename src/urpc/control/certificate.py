@@ -159,7 +159,7 @@ def certify(
         max_period = search.max_sample_period() if math.isfinite(d) else 0.0
         figures.update(floor_of.figures(quantities))
         figures.update(parts)
-        figures.update(search.report(floor, parts))
+        figures.update(search.report(floor, parts, quantities))
         conditions += _sampled_conditions(figures, floor, controller.epsilon, max_period)
     holds = all(c.holds for c in conditions) and floor <= controller.epsilon
     if controller.sample_period is None and not controller.adaptive:
@@ -272,8 +272,9 @@ class _SampledSearch:
                 break
         return low
 
-    def report(self, floor: float, parts: dict) -> dict[str, Any]:
-        """What dominates the floor, where, and what would certify."""
+    def report(self, floor: float, parts: dict, quantities: dict) -> dict[str, Any]:
+        """What dominates the floor, where, and what would certify (``quantities``: the
+        enclosures the floor was found with)."""
         floor_of = self.floor_of
         shares = parts.get("shares") or {}
         out: dict[str, Any] = {}
@@ -284,9 +285,6 @@ class _SampledSearch:
             out["term_shares"] = {k: v / total for k, v in shares.items()}
             cell = parts.get("slow_cell", 0)
             out["worst_time"] = floor_of.cell_time(cell)[0]
-            quantities = floor_of.quantities(
-                parts.get("basin_tube", self.epsilon), parts["r_max"], self.extension
-            )
             lightest = _lightest_joint(floor_of, quantities, cell)
             out["lightest_joint"] = floor_of.robot.joint_names[lightest]
         if self.controller.adaptive and self.controller.phi_I > 0:

@@ -4,7 +4,8 @@ derivative), vectorized over batches: the arithmetic of :mod:`urpc.model.regress
 Each elementary operation returns the floating-point result of the midpoints and adds to the
 radius a bound of its rounding error (``2u |result|`` for a sum or product, ``(k + 2) u`` times the
 sum of the magnitudes for a ``k``-term dot product, ``u = 2^-53``); the radius itself is computed
-with its terms inflated by ``1 + 8u``. ``sin``/``cos`` of ``[x - r, x + r]`` are
+with its terms inflated by ``1 + 8u`` (``1 + 2 (k + 4) u`` for a ``k``-term product, whose
+radius is a ``k``-term sum). ``sin``/``cos`` of ``[x - r, x + r]`` are
 ``cos x +- (|sin x| r + r^2 / 2)`` plus 2 ulps for the library's rounding.
 """
 
@@ -151,10 +152,13 @@ def matmul(A, B):
         A, B = Jet.of(A), Jet.of(B)
         return Jet(matmul(A.val, B.val), matmul(A.dot, B.val) + matmul(A.val, B.dot))
     terms = A.mid.shape[-1]
-    absA = np.abs(A.mid)
+    absB = np.abs(B.mid)
     mid = A.mid @ B.mid
-    rad = absA @ B.rad + A.rad @ (np.abs(B.mid) + B.rad) + (terms + 2) * U * (absA @ np.abs(B.mid))
-    return Ball(mid, rad * UP)
+    # |A B - mid| <= |A| rad_B + rad_A (|B| + rad_B) + (k + 2) u |A| |B| (one product fewer
+    # when grouped); the radius is itself a k-term sum of non-negative products, rounded with
+    # a relative error below (k + 2) u: it is inflated by twice that.
+    rad = np.abs(A.mid) @ (B.rad + (terms + 2) * U * absB) + A.rad @ (absB + B.rad)
+    return Ball(mid, rad * (1.0 + 2 * (terms + 4) * U))
 
 
 def matvec(A, x):
