@@ -43,4 +43,7 @@ def run_certify(args) -> int:
         mark = "ok  " if c.holds else "FAIL"
         line = f"  {mark} {c.name:<{width}}  value {c.value:.4g}  limit {c.limit:.4g}"
         print(line if c.holds else f"{line}  -> {c.explanation}")
+    advice = certificate.figures.get("advice")
+    if advice:
+        print(f"  {advice}")
     return EXIT_OK

@@ -201,6 +201,26 @@ class CenteredCoriolis:
         return constant * (1 + LAPACK_MARGIN), per_velocity * (1 + LAPACK_MARGIN)
 
 
+def velocity_bound(
+    constant: np.ndarray,
+    per_velocity: np.ndarray,
+    box: np.ndarray,
+    components: np.ndarray,
+    norm: float,
+    weights: np.ndarray | float = 1.0,
+) -> np.ndarray:
+    """``sup (constant + sum_k |dv_k| B_k)`` per cell over ``dv = x + y`` with ``|x_k| <= box_k``
+    and ``y = weights * z``, ``|y_k| <= components_k``, ``||z||_2 <= norm``: the box part
+    componentwise, the ball part by the better of its componentwise bound and Cauchy-Schwarz
+    ``sum_k |w_k z_k| B_k <= ||z|| ||w B||`` (the error's rate and the tube are balls in the
+    2-norm, which a box over-states by up to ``sqrt(n)``). ``B``: (cells, n)."""
+    ball = np.minimum(
+        np.sum(per_velocity * components, axis=-1),
+        norm * np.sqrt(np.sum((per_velocity * weights) ** 2, axis=-1)),
+    )
+    return (constant + np.sum(per_velocity * box, axis=-1) + ball) * (1 + 1e-12)
+
+
 def congruence(P: np.ndarray, A: np.ndarray) -> np.ndarray:
     """``P A P^T`` per cell."""
     return P @ A @ np.swapaxes(P, -1, -2)

@@ -33,6 +33,7 @@ from .cell_bounds import (
     inertia_model,
     link_parameters,
     plant_hull,
+    velocity_bound,
 )
 from .interval import PHI_MAX_FACTOR, IntervalPassivityController
 from .sampled_joints import JointTerms
@@ -126,13 +127,17 @@ class CellFloor:
         if key in self._cache:
             return self._cache[key]
         enclosed = self._tube_enclosures(tube, extension)
-        _, qd_a, qdd_a, velocity = self._states(tube, r_max, extension)
-        speed = velocity.magnitude  # |qd| over the plant's velocity box
+        _, qd_a, qdd_a, _ = self._states(tube, r_max, extension)
+        # The plant's velocity qd = qd_d - ed: the reference's box plus the error's rate, a ball
+        # ||ed|| <= ||r|| + ||Kr e|| (componentwise |ed_i| <= ||r|| + Kr_i ||e||).
+        reference_velocity = enclosed["reference_velocity"]
+        ed, ed_norm = r_max + self.Kr * tube, r_max + float(self.Kr.max()) * tube
         law = enclosed["law"]
         # ||M_L^-1/2 dM_L/dt M_L^-1/2|| <= sum_k |qd_k| s_k / (1 - eps), qd the plant's velocity.
-        law_rate_norm = np.sum(speed * enclosed["law_slopes"], axis=-1) / (
-            1 - np.minimum(law.eps, 0.999999)
-        )
+        slopes = enclosed["law_slopes"]
+        law_rate_norm = velocity_bound(
+            np.sum(reference_velocity.magnitude * slopes, axis=-1), slopes, 0.0, ed, ed_norm
+        ) / (1 - np.minimum(law.eps, 0.999999))
         # Drives: smooth terms per component (values and rates), and the drive torque's rate.
         drive, drive_rate = self._drive_terms(qd_a, qdd_a)
         torque_rate_max = enclosed["torque_rate"] + self._drive_torque_rate(qd_a, qdd_a)
@@ -140,27 +145,32 @@ class CellFloor:
         for piece in enclosed["pieces"]:
             metrics = piece["metrics"]
             R, RM, Rs, V = piece["R"], piece["RM"], piece["Rs"], piece["V"]
-            Rdot, Vdot = piece["Rdot"], piece["Vdot"]
+            Rdot, RdotM, Vdot = piece["Rdot"], piece["RdotM"], piece["Vdot"]
             if drive is not None:
                 equilibrium, metric, scaled, magnitude = metrics.vector(drive)
                 R, RM, Rs, V = R + equilibrium, RM + metric, Rs + scaled, V + magnitude
-                equilibrium, _, _, magnitude = metrics.vector(drive_rate)
-                Rdot, Vdot = Rdot + equilibrium, Vdot + magnitude
+                equilibrium, metric, _, magnitude = metrics.vector(drive_rate)
+                Rdot, RdotM, Vdot = Rdot + equilibrium, RdotM + metric, Vdot + magnitude
             # Rate of the nominal torque (the held torque lags it), in both metrics.
             lag, lag_M = (x[0] for x in metrics.vector(torque_rate_max)[:2])
             # d/dt (M_L^-1 w) = M_L^-1 (dw/dt) - M_L^-1 (dM_L/dt) M_L^-1 w.
+            # In the plant's metric: ||M^1/2 M_L^-1/2|| <= beta^-1/2 (M_L >= beta M_U >= beta M).
             lam_law = np.maximum(out["law_lam_L"], 1e-300)
             inverse_change = law_rate_norm / np.sqrt(lam_law)
+            beta = piece["static"]["beta"]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                metric_change = np.where(beta > 0, law_rate_norm / np.sqrt(beta), math.inf)
             # The plant's C on r over the velocity box (affine in its radii), in M_L's metric.
             constant, per_velocity = piece["coriolis_coefficients"]
-            gamma = (constant + np.sum(per_velocity * velocity.rad, axis=-1)) * piece["to_lower"]
-            gamma = gamma * (1 + LAPACK_MARGIN)
+            gamma = velocity_bound(constant, per_velocity, reference_velocity.rad, ed, ed_norm)
+            gamma = gamma * piece["to_lower"] * (1 + LAPACK_MARGIN)
             metric_rate = 2.0 * gamma  # ||M^-1/2 (C + C^T) M^-1/2|| <= 2 ||M^-1/2 C M^-1/2||
             out["pieces"].append(
                 dict(
                     piece["static"],
                     R=R, RM=RM, V=V, Rs=Rs,
                     rate_inverse=Rdot[0], inverse_change=inverse_change, rate=Vdot[0],
+                    rate_inverse_M=RdotM[0], inverse_change_M=metric_change,
                     lag=lag, lag_M=lag_M,
                     coriolis=gamma + piece["gamma_delta"], metric_rate=metric_rate,
                 )
@@ -197,7 +207,9 @@ class CellFloor:
         torque_per_error_rate = np.sqrt(
             np.sum((np.abs(along_error.mid) + along_error.rad) ** 2, axis=1)
         )
+        reference_velocity = self._states(0.0, 0.0, extension)[3]
         enclosed = {
+            "reference_velocity": reference_velocity,
             "law": law,
             "law_slopes": model_slopes[1],
             "torque_rate": np.abs(torque_rate.mid) + torque_rate.rad,
@@ -233,7 +245,8 @@ class CellFloor:
             metrics = MismatchNorms(law, upper)
             # (centre, per unit of tube) pairs, (2, cells): R(rho) = R[0] + rho R[1].
             R, RM, Rs, V = (np.zeros((2, cells)) for _ in range(4))
-            Rdot, Vdot = np.zeros((2, cells)), np.zeros((2, cells))
+            Rdot, RdotM, Vdot = (np.zeros((2, cells)) for _ in range(3))
+            per_link = []  # each link's part of R, for the report
             for link in links:
                 # Value: the reference cell at e = 0, plus the tube by its Jacobian (mean value).
                 columns = link.columns
@@ -241,19 +254,25 @@ class CellFloor:
                     center[..., columns], tube_jacobian[..., columns], link
                 )
                 R, RM, Rs, V = R + equilibrium, RM + metric, Rs + scaled, V + magnitude
+                per_link.append(equilibrium)
                 # Rate along the reference at a fixed error, over the whole box.
-                equilibrium, _, _, magnitude = metrics.link(Y.dot[..., columns], None, link)
-                Rdot, Vdot = Rdot + equilibrium, Vdot + magnitude
+                equilibrium, metric, _, magnitude = metrics.link(Y.dot[..., columns], None, link)
+                Rdot, RdotM, Vdot = Rdot + equilibrium, RdotM + metric, Vdot + magnitude
             lag_e, lag_M_e = (x[0] for x in metrics.vector(torque_per_error_rate)[:2])
             to_lower = 1.0 / (1 - np.minimum(lower.eps, 0.999999)) * (1 + LAPACK_MARGIN)
             constant, per_velocity = coriolis_mismatch.coefficients(lower.inverse_factor)
-            gamma_delta = (constant + np.sum(per_velocity * qd_a.val.rad, axis=-1)) * to_lower
+            # Along qd_a = qd_d + Kr e: the reference's box plus Kr e with ||e|| <= tube.
+            gamma_delta = velocity_bound(
+                constant, per_velocity, reference_velocity.rad, self.Kr * tube, tube, self.Kr
+            )
+            gamma_delta = gamma_delta * to_lower
             uniform = np.ptp(self.Kr) == 0
             K = self.Kr.max() * (1.0 if uniform else np.sqrt(lam_U / np.maximum(lam_L, 1e-300)))
             enclosed["pieces"].append(
                 {
                     "metrics": metrics,
-                    "R": R, "RM": RM, "Rs": Rs, "V": V, "Rdot": Rdot, "Vdot": Vdot,
+                    "R": R, "RM": RM, "Rs": Rs, "V": V, "Rdot": Rdot, "RdotM": RdotM,
+                    "Vdot": Vdot,
                     "coriolis_coefficients": coriolis.coefficients(lower.inverse_factor),
                     "to_lower": to_lower,
                     "gamma_delta": gamma_delta * (1 + LAPACK_MARGIN),
@@ -261,6 +280,7 @@ class CellFloor:
                         "valid": valid & (lam_L > 0) & (beta > 0),
                         "lam_L": lam_L, "lam_U": lam_U, "beta": beta, "nu": nu, "K": K,
                         "lag_e": lag_e, "lag_M_e": lag_M_e,
+                        "R_links": np.array(per_link).reshape(len(links), 2, cells),
                     },
                 }
             )  # fmt: skip
@@ -376,7 +396,9 @@ class CellFloor:
         R, RM, V, Rs = (p[name][0] + tube * p[name][1] for name in ("R", "RM", "V", "Rs"))
         # ||ed|| <= ||r|| + Kr ||e|| moves w along the tube's Jacobian.
         error_rate = q["r_max"] + float(self.Kr.max()) * tube
+        # The rate of M_L^-1 w, in the Euclidean norm and straight in the plant's metric.
         rate_inverse = p["rate_inverse"] + error_rate * p["R"][1] + p["inverse_change"] * Rs
+        rate_inverse_M = p["rate_inverse_M"] + error_rate * p["RM"][1] + p["inverse_change_M"] * Rs
         rate = p["rate"] + error_rate * p["V"][1]
         lag = p["lag"] + error_rate * p["lag_e"]
         lag_M = p["lag_M"] + error_rate * p["lag_M_e"]
@@ -387,7 +409,8 @@ class CellFloor:
         sqrt_L, sqrt_U = np.sqrt(lam_L), np.sqrt(lam_U)
         equilibrium = T * (R + 0.5 * T * lag) + V / D
         response = T * d * (q["trace_inverse"] + n / (D * T))
-        forcing = sqrt_U * T * (T * rate_inverse + rate / D) * (1 + growth)
+        rate_M = np.minimum(rate_inverse_M, sqrt_U * rate_inverse)
+        forcing = T * (T * rate_M + sqrt_U * rate / D) * (1 + growth)
         equilibrium_M = T * (RM + 0.5 * T * lag_M) + sqrt_U * V / D
         response_M = T * d / (np.maximum(a, 1e-300) * sqrt_L)
         return {
@@ -441,6 +464,16 @@ class CellFloor:
             lambda_L_min=float(terms["lam_L"].min()),
         )
         return floor, parts
+
+    def dominant_link(self, quantities: dict, piece: int, cell: int, tube: float):
+        """The uncertain link with the largest part of ``||M_L^-1 w||`` at a cell of a piece,
+        and that part's share, or ``None`` without uncertain links."""
+        parts = quantities["pieces"][piece]["R_links"]
+        if not len(parts):
+            return None
+        values = parts[:, 0, cell] + tube * parts[:, 1, cell]
+        k = int(np.argmax(values))
+        return self.pieces[piece].uncertain_links[k].link, float(values[k] / np.sum(values))
 
     def figures(self, quantities: dict) -> dict[str, float]:
         pieces = quantities["pieces"]

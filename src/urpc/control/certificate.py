@@ -162,6 +162,8 @@ def certify(
         figures.update(search.report(floor, parts, quantities))
         conditions += _sampled_conditions(figures, floor, controller.epsilon, max_period)
     holds = all(c.holds for c in conditions) and floor <= controller.epsilon
+    if not holds and law == "implicit":
+        figures["advice"] = _advice(figures, floor, controller, max_period)
     if controller.sample_period is None and not controller.adaptive:
         conditions.append(
             Condition(
@@ -287,11 +289,64 @@ class _SampledSearch:
             out["worst_time"] = floor_of.cell_time(cell)[0]
             lightest = _lightest_joint(floor_of, quantities, cell)
             out["lightest_joint"] = floor_of.robot.joint_names[lightest]
+            link = floor_of.dominant_link(
+                quantities, parts.get("piece", 0), cell, parts.get("tube", self.epsilon)
+            )
+            if link is not None:
+                out["dominant_link"], out["dominant_link_share"] = link
         if self.controller.adaptive and self.controller.phi_I > 0:
             s_max = (self.controller.phi_max - self.controller.phi_P) / self.controller.phi_I
             #: Before the gains saturate, ||e_k|| >= epsilon for at most s_max / epsilon seconds.
             out["time_above_epsilon_before_saturation"] = s_max / self.epsilon
         return out
+
+
+#: What each term of the floor is, for the advice.
+TERMS = {
+    "mismatch": "the model mismatch w over the box (the held loop's quasi-static error)",
+    "torque_lag": "the nominal torque's change within a period",
+    "disturbance": "the disturbance's response, through the lightest inertia mode",
+    "deviation": "the motion of the quasi-static error and the perturbations of the period "
+    "(Coriolis, the metric's change, T Kr) acting on it",
+}
+
+
+def _advice(
+    figures: dict, floor: float, controller: IntervalPassivityController, max_period: float
+) -> str:
+    """One paragraph: the changes that certify (computed: the period; the epsilon of the floor
+    in a wider tube) and what the floor is made of (term, joint, link)."""
+    T = controller.sample_period
+    changes = []
+    if max_period > 0:
+        changes.append(f"shorten the period to {max_period * 1e3:.3g} ms (certified there)")
+    else:
+        changes.append("no period up to 2 T is certified")
+    if math.isfinite(floor) and floor > controller.epsilon:
+        changes.append(f"raise epsilon to {floor:.3g} rad (the floor at T = {T * 1e3:.3g} ms)")
+    text = "to certify: " + ", or ".join(changes)
+    term = figures.get("dominant_term")
+    if term is None:
+        margin = figures.get("margin", math.nan)
+        return (
+            text + f"; the period's perturbation b exceeds its contraction a (a - b = {margin:.3g}"
+            "): b grows with T Kr and T |qd|, so a shorter period or a lower Kr helps"
+        )
+    share = figures["term_shares"][term]
+    text += (
+        f"; the floor is {share:.0%} '{term}' ({TERMS[term]}), at t = "
+        f"{figures['worst_time']:.3g} s, through joint '{figures['lightest_joint']}'"
+        " (the lightest mode)"
+    )
+    link = figures.get("dominant_link")
+    if link is not None:
+        text += (
+            f"; link '{link}' is {figures['dominant_link_share']:.0%} of the mismatch: "
+            "narrowing its box lowers the mismatch and deviation terms"
+        )
+    if term == "disturbance":
+        text += "; a smaller disturbance bound or a larger Kr lowers it in proportion"
+    return text
 
 
 def _lightest_joint(floor_of: CellFloor, quantities: dict, cell: int) -> int:
