@@ -87,7 +87,30 @@ def _check_cells_hold_points(robot, box, controller, trajectory, duration, tube,
             assert np.linalg.norm(w) <= V * (1 + 1e-9), (t, cell)
             beta = np.min(np.linalg.eigvals(np.linalg.solve(plant.M(q), M_law)).real)
             assert beta >= values["beta"][cell] * (1 - 1e-9), (t, cell)
+            # The rate of M_L^-1 w along the reference at this fixed e, in the plant's metric
+            # (central differences of Pinocchio), against the cell's bound of it.
+            rate = _metric_rate(plant, nominal, law, trajectory, t, e, Kr)
+            Rs = values["Rs"][0][cell] + tube * values["Rs"][1][cell]
+            bound = values["rate_inverse_M"][cell] + values["inverse_change_M"][cell] * Rs
+            assert rate <= bound * (1 + 1e-6) + 1e-9, (t, cell, rate, bound)
         assert np.trace(np.linalg.inv(M_law)) <= quantities["trace_inverse"][cell] * (1 + 1e-9)
+
+
+def _metric_rate(plant, nominal, law, trajectory, t, e, Kr, h=1e-6) -> float:
+    """``||M^1/2 d/dt (M_L^-1 w)||`` at ``t`` for a fixed error ``e`` (``r = 0``)."""
+
+    def inverse_w(s):
+        reference = trajectory.reference(s)
+        q, qd_a, qdd_a = reference.q - e, reference.qd + Kr * e, reference.qdd - Kr * Kr * e
+        w = (
+            plant.M(q) @ qdd_a + plant.C(q, qd_a) @ qd_a + plant.g(q)
+            - nominal.M(q) @ qdd_a - nominal.C(q, qd_a) @ qd_a - nominal.g(q)
+        )  # fmt: skip
+        return np.linalg.solve(law.M(q), w)
+
+    derivative = (inverse_w(t + h) - inverse_w(t - h)) / (2 * h)
+    q = trajectory.reference(t).q - e
+    return float(np.linalg.norm(np.linalg.cholesky(plant.M(q)).T @ derivative))
 
 
 def test_cells_hold_pinocchio_between_them_rr(rr, rr_box):
