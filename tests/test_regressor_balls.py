@@ -81,6 +81,35 @@ def test_boxes_hold_pinocchio_evaluations(robot):
             assert np.all(np.abs(robot.C(qq, vv) - C.mid[b, 0]) <= C.rad[b, 0])
 
 
+def test_christoffel_matrices_hold_pinocchio(robot):
+    """``C(q; e_k)`` for every unit velocity, built from the pairs ``k <= i`` only, holds
+    Pinocchio's Coriolis matrix at points of the box, for two parameter vectors at once."""
+    rng = np.random.default_rng(5)
+    regressor = BallRegressor(robot)
+    pi = parameters_of(robot)
+    scaled = pi * rng.uniform(0.8, 1.2, pi.shape)  # another model: C is linear in pi
+    n, batch = robot.dof, 4
+    q = Ball(rng.standard_normal((batch, n)), np.full((batch, n), 0.05))
+    each = regressor.christoffel_matrices(q, Ball.point(np.stack([pi, scaled])))
+    assert each.mid.shape == (batch, n, 2, n, n)
+    model = robot.model.copy()
+    for j in range(n):
+        model.inertias[j + 1] = pin.Inertia.FromDynamicParameters(scaled[10 * j : 10 * j + 10])
+    data = model.createData()
+    for b in range(batch):
+        for qq in _draws(rng, q.mid[b], q.rad[b], 6):
+            for k in range(n):
+                unit = np.eye(n)[k]
+                for p, C in enumerate(
+                    (
+                        robot.C(qq, unit),
+                        pin.computeCoriolisMatrix(model, data, robot.configuration(qq), unit),
+                    )
+                ):
+                    slack = 1e-13 * (1 + np.abs(C))  # Pinocchio's own rounding
+                    assert np.all(np.abs(C - each.mid[b, k, p]) <= each.rad[b, k, p] + slack)
+
+
 def test_jets_hold_finite_differences(robot):
     """d/dt of Y_SL and M along q(t) = q0 + t qd0 etc. (every input moving at its rate)."""
     rng = np.random.default_rng(3)

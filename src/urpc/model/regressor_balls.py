@@ -254,6 +254,35 @@ class BallRegressor:
         return (plus - minus).scaled(0.25).map(lambda x: np.moveaxis(x, -3, -1))
 
 
+    def christoffel_matrices(self, q, parameters):
+        """``C(q; e_k)`` for every unit velocity ``e_k`` and each model over the boxes of ``q``:
+        ``batch + (k, P, dof, dof)``. Column ``i`` of ``C(q; e_k)`` is column ``k`` of
+        ``C(q; e_i)`` (the Christoffel symbols are symmetric in their last two indices), so only
+        the ``dof (dof + 1) / 2`` pairs ``k <= i`` are evaluated, each by polarization
+        ``(c(q, e_k + e_i) - c(q, e_k - e_i)) / 4``, instead of ``dof^2``."""
+        n = self.dof
+        batch = q.shape[:-1]
+        first, second = np.triu_indices(n)
+        pairs = len(first)
+        eye = np.eye(n)
+        qq = q.map(lambda x: np.broadcast_to(x[..., None, :], batch + (pairs, n)))
+        zero = zeros(batch + (pairs, n))
+
+        def velocities(v):
+            return Ball.point(np.broadcast_to(v, batch + (pairs, n)))
+
+        plus = self.torques(qq, velocities(eye[first] + eye[second]), zero, parameters, 0.0)
+        minus = self.torques(qq, velocities(eye[first] - eye[second]), zero, parameters, 0.0)
+        columns = (plus - minus).scaled(0.25)  # batch + (pairs, P, rows)
+        models = columns.mid.shape[-2]
+        shape = batch + (n, models, n, n)
+        mid, rad = np.zeros(shape), np.zeros(shape)
+        for values, out in ((columns.mid, mid), (columns.rad, rad)):
+            out[..., first, :, :, second] = np.moveaxis(values, -3, 0)
+            out[..., second, :, :, first] = np.moveaxis(values, -3, 0)
+        return Ball(mid, rad)
+
+
 def parameters_of(robot: Robot) -> np.ndarray:
     """The standard parameters ``pi`` of a model's joint bodies (Pinocchio order), ``(10 dof,)``."""
     model = robot.model
