@@ -32,6 +32,7 @@ _LAZY = {
     "Controller": (".control.base", "Controller"),
     "IntervalPassivityController": (".control.interval", "IntervalPassivityController"),
     "synthesize": (".control.synthesis", "synthesize"),
+    "search_gains": (".control.gain_search", "search_gains"),
     "load_controller": (".control.controller_file", "load_controller"),
     "ControlLoop": (".robot.loop", "ControlLoop"),
     "SafetyLayer": (".robot.safety", "SafetyLayer"),
@@ -103,6 +104,7 @@ __all__ = [
     "SimulationResult",
     "simulate",
     "synthesize",
+    "search_gains",
     "load_controller",
     "ControlLoop",
     "SafetyLayer",
@@ -144,6 +146,7 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
     from .control.base import Controller
     from .control.certificate import Certificate, certify
     from .control.controller_file import load_controller
+    from .control.gain_search import search_gains
     from .control.interval import IntervalPassivityController
     from .control.synthesis import synthesize
     from .identify import identify

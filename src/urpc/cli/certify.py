@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..control.gain_search import KR_CANDIDATES
 from .common import EXIT_OK, print_json
 
 
@@ -22,6 +23,14 @@ def register(commands) -> None:
         "output); 2 on bad input.",
     )
     add_scenario_arguments(p, simulate=False)
+    p.add_argument(
+        "--search-kr",
+        action="store_true",
+        help="certified synthesis of Kr: certify the controller for each uniform gain of "
+        f"{', '.join(f'{k:g}' for k in KR_CANDIDATES)} 1/s and report the best certificate "
+        "(certified with the lowest floor, else the longest certified period); each candidate "
+        "costs one certificate",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(handler=run_certify)
 
@@ -32,11 +41,48 @@ def run_certify(args) -> int:
     from .simulate import scenario_from_arguments
 
     scenario = scenario_from_arguments(args)
-    setup = build(scenario)
-    certificate = certify_setup(setup, build_controller(setup, "interval"))
+    search = None
+    if args.search_kr:
+        from ..control.gain_search import best_gain
+        from ..errors import InputError
+
+        probe = build_controller(build(scenario), "interval")
+        if probe.sample_period is not None and probe.sampled_law == "paper":
+            raise InputError(
+                "--search-kr needs the implicit sampled law: the paper's law under a hold is "
+                "never certified, whatever Kr; give --sampled-law implicit",
+                field="sampled_law",
+            )
+
+        def certify_with(Kr: float):
+            options = {"interval": {"Kr": Kr}}
+            candidate = build(scenario.with_overrides(controller_options=options))
+            controller = build_controller(candidate, "interval")
+            return controller, certify_setup(candidate, controller)
+
+        def report(trial) -> None:
+            if not args.json:
+                c = trial.certificate
+                state = "certified" if c.certified else "not certified"
+                print(
+                    f"  Kr = {trial.Kr:<5g} {state:<13} floor {c.epsilon_floor:.3g} rad, "
+                    f"max sample period {c.max_sample_period * 1e3:.3g} ms",
+                    flush=True,
+                )
+
+        if not args.json:
+            print(f"{scenario.name}: searching Kr ({len(KR_CANDIDATES)} certificates)")
+        search = best_gain(certify_with, KR_CANDIDATES, report)
+        certificate = search.best.certificate
+    else:
+        setup = build(scenario)
+        certificate = certify_setup(setup, build_controller(setup, "interval"))
     if args.json:
-        print_json({"scenario": scenario.name, **certificate.to_dict()})
+        extra = {} if search is None else {"kr_search": search.to_dict()}
+        print_json({"scenario": scenario.name, **certificate.to_dict(), **extra})
         return EXIT_OK
+    if search is not None:
+        print(f"best Kr = {search.best.Kr:g} 1/s (uniform); its certificate:")
     print(f"{scenario.name}: {certificate.summary()}")
     width = max(len(c.name) for c in certificate.conditions)
     for c in certificate.conditions:
