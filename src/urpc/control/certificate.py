@@ -155,8 +155,8 @@ def certify(
         disturbance_bound: ``||d||`` bound [N m] the plant sees. Theorem 2 does not need it in
             continuous time, but the sampled-data floor does; defaults to the box's bound.
         cells: Number of cells of time (default: chosen from the reference's speed).
-        progress: Called with one short line (``"enclosing 236 cells (tube 0.01)"``) as each
-            stage of the sampled-data search starts, or ``None``.
+        progress: Called with one short line as each stage of the sampled-data search starts
+            (``"enclosing 236 cells (||e|| <= 0.01, ||r|| <= 0.45)"``), or ``None``.
     """
     box = controller.bound.box
     d = box.disturbance_bound if disturbance_bound is None else float(disturbance_bound)
@@ -244,7 +244,8 @@ class _SampledSearch:
         T = self.T if T is None else T
         r_max = 1.5 * float(self.controller.Kr.max()) * tube + 1e-6
         for _ in range(5):
-            self.say(f"enclosing {self.floor_of.cells} cells (tube {tube:.3g} rad, r {r_max:.3g})")
+            cells = self.floor_of.cells
+            self.say(f"enclosing {cells} cells (||e|| <= {tube:.3g}, ||r|| <= {r_max:.3g})")
             quantities = self.floor_of.quantities(tube, r_max, self.extension)
             floor, parts, _ = self.least_tube(quantities, T)
             if not math.isfinite(floor) or parts["r_sup"] <= r_max:
@@ -271,7 +272,7 @@ class _SampledSearch:
         itself with ``||r||`` inside the enclosure: the states from which the floor is reached
         once the gains have saturated."""
         rho = quantities["tube"]
-        self.say(f"scanning the basin (tube {rho:.3g} rad)")
+        self.say(f"scanning the basin (||e|| <= {rho:.3g})")
         while rho > max(least, 1e-6 * quantities["tube"]):
             floor, parts = self.floor_of.floor_at(self.T, self.d, quantities, rho)
             if floor <= rho and parts.get("r_sup", math.inf) <= quantities["r_max"]:
