@@ -152,7 +152,7 @@ def add_plant_argument(group, default: str) -> None:
 def run_simulate(args) -> int:
     from ..sim.metrics import describe_final_window
     from ..sim.plotting import plot_error, plot_gains, plot_torque, plot_trajectory
-    from ..studies.certification import guarantee as certify_run
+    from ..studies.certification import guarantee_of
     from ..studies.scenario import build, build_controller, simulate_setup
 
     if args.out is not None:
@@ -163,7 +163,7 @@ def run_simulate(args) -> int:
     scenario = scenario_from_arguments(args)
     setup = build(scenario)
     controller = build_controller(setup)
-    outcome = certify_run(
+    outcome = guarantee_of(
         setup,
         controller,
         certify=not args.no_certify,

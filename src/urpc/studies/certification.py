@@ -5,7 +5,7 @@ everything else (the reference it tracks, for how long, and the disturbance boun
 The certificate is computed once per configuration and read back from the certificate cache
 after that (:mod:`urpc.control.certificate_cache`; ``cache=False`` computes it without the
 cache, ``refresh=True`` computes it again and replaces the record). Runs and campaigns record the
-outcome with :func:`certificate_fields` (or :func:`guarantee`, which also says where the
+outcome with :func:`certificate_fields` (or :func:`guarantee_of`, which also says where the
 certificate came from); ``certify=False`` skips it, and the fields say so.
 """
 
@@ -105,7 +105,7 @@ def cached_setup(
     return outcome
 
 
-def guarantee(
+def guarantee_of(
     setup,
     controller: Controller,
     *,
@@ -139,6 +139,6 @@ def guarantee(
 def certificate_fields(setup, controller: Controller, **options: Any) -> dict[str, Any]:
     """``certified`` (bool, or ``None`` when not computed), ``certificate`` (its fields, or
     ``None``) and ``not_certified`` (one line saying why, or ``None``) of a run of ``controller``
-    in ``setup``; ``options`` as for :func:`guarantee` (``certify``, ``cache``, ``refresh``,
+    in ``setup``; ``options`` as for :func:`guarantee_of` (``certify``, ``cache``, ``refresh``,
     ``progress``)."""
-    return guarantee(setup, controller, **options).fields
+    return guarantee_of(setup, controller, **options).fields

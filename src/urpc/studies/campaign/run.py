@@ -13,9 +13,10 @@ import numpy as np
 
 from ... import __version__
 from ...atomic import check_writable
+from ...control.certificate_cache import CertificateCache
 from ...errors import InputError
 from ...model.parameter_box import JOINTS
-from ..certification import guarantee as certify_run
+from ..certification import guarantee_of
 from ..pool import submit_all, worker_pool
 from ..scenario import Scenario, build, build_controller, load_scenario
 from .draws import checked_count, draw_runs
@@ -53,7 +54,7 @@ def run_campaign(
     out: str | Path | None = None,
     resume: bool = False,
     certify: bool = True,
-    certificate_cache: bool | Any = True,
+    certificate_cache: bool | CertificateCache = True,
     refresh_certificate: bool = False,
 ) -> CampaignResult:
     """Run ``runs`` closed-loop simulations of ``scenario`` with drawn true parameters,
@@ -107,7 +108,7 @@ def run_campaign(
     try:
         setup = build(scenario)
         # Bad controller options fail here, before any worker starts; one certificate for all.
-        guarantee = certify_run(
+        guarantee = guarantee_of(
             setup,
             build_controller(setup),
             certify=certify,
