@@ -181,3 +181,19 @@ def test_certify_reads_the_cache_and_no_cache_computes_again(capsys, counted):
     code, fresh, _ = _run(capsys, *CERTIFY, "--no-cache", "--json")
     assert code == 0 and len(counted) == 2
     assert json.loads(fresh)["non_finite"]["/epsilon_floor"] == "inf"
+
+
+def test_an_unusable_cache_gives_one_warning_and_the_run_goes_on(
+    capsys, counted, tmp_path, monkeypatch
+):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a folder")
+    monkeypatch.setenv("URPC_CACHE_DIR", str(blocker / "cache"))
+    code, out, err = _run(capsys, *SIMULATE)
+    assert code == 0, err
+    cache_lines = [line for line in err.splitlines() if "certificate cache" in line]
+    assert len(cache_lines) == 1 and cache_lines[0].startswith("warning: the certificate cache ")
+    assert "URPC_CACHE_DIR" in cache_lines[0]
+    line = _line(out, "certificate  ")
+    assert line.startswith("certificate  computed in ") and "not cached: the cache cannot" in line
+    assert len(counted) == 1

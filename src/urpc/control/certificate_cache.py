@@ -13,7 +13,7 @@
   line describing the configuration, the date, urpc's version and
   :data:`~urpc.control.certificate.CERTIFICATE_VERSION`.
 * **Never in the way.** A cache that cannot be opened, read or written (a read-only folder, a
-  corrupt file, a full disk) never fails a run: one warning per file and reason, and the
+  corrupt file, a full disk) never fails a run: one warning per file and process, and the
   certificate is computed. A record that does not read back as a certificate is computed again
   and replaced.
 * **Clearing.** Delete the folder, or its ``certificates.sqlite*`` files; nothing else refers to
@@ -49,8 +49,8 @@ FORMAT = 1
 #: Hex digits of the key shown to the user.
 SHORT_KEY = 12
 
-#: (file, reason) pairs already warned about in this process.
-_warned: set[tuple[str, str]] = set()
+#: The cache files already warned about in this process (one warning each).
+_warned: set[str] = set()
 
 
 def default_directory() -> Path:
@@ -160,9 +160,9 @@ class CertificateCache:
 
     def _warn(self, exc: BaseException, what: str) -> None:
         reason = getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
-        if (str(self.path), what) in _warned:
+        if str(self.path) in _warned:
             return
-        _warned.add((str(self.path), what))
+        _warned.add(str(self.path))
         warnings.warn(
             f"the certificate cache {self.path} {what} ({reason}); the certificate is computed "
             f"without it (set {CACHE_ENV} to another folder, or delete this one)",
