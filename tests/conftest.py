@@ -17,8 +17,18 @@ RR_DIR = ROOT / "robots" / "rr_planar"
 PANDA_FINGERS = ["panda_finger_joint1", "panda_finger_joint2"]
 
 
+@pytest.fixture(scope="session", autouse=True)
+def session_certificate_cache_dir(tmp_path_factory):
+    """``URPC_CACHE_DIR`` for the whole session, set before any module or session fixture runs
+    (a module fixture that runs a campaign computes a certificate before a test's own fixture)."""
+    with pytest.MonkeyPatch.context() as patch:
+        folder = tmp_path_factory.mktemp("urpc-cache-session")
+        patch.setenv("URPC_CACHE_DIR", str(folder))
+        yield folder
+
+
 @pytest.fixture(autouse=True)
-def certificate_cache_dir(tmp_path_factory, monkeypatch) -> Path:
+def certificate_cache_dir(session_certificate_cache_dir, tmp_path_factory, monkeypatch) -> Path:
     """A fresh, empty certificate cache folder for each test (``URPC_CACHE_DIR``; outside the
     test's ``tmp_path``, which some tests list)."""
     folder = tmp_path_factory.mktemp("urpc-cache")
