@@ -1,4 +1,6 @@
-"""Shared fixtures: robots are loaded once per test session (loading parses URDFs)."""
+"""Shared fixtures: robots are loaded once per test session (loading parses URDFs); every test
+gets its own certificate cache folder (``URPC_CACHE_DIR``), so that the suite never writes into
+the user's cache and no test sees another's certificates."""
 
 from __future__ import annotations
 
@@ -13,6 +15,25 @@ from urpc.model.uncertainty import load_parameter_point, load_uncertainty
 ROOT = Path(__file__).resolve().parents[1]
 RR_DIR = ROOT / "robots" / "rr_planar"
 PANDA_FINGERS = ["panda_finger_joint1", "panda_finger_joint2"]
+
+
+@pytest.fixture(scope="session", autouse=True)
+def session_certificate_cache_dir(tmp_path_factory):
+    """``URPC_CACHE_DIR`` for the whole session, set before any module or session fixture runs
+    (a module fixture that runs a campaign computes a certificate before a test's own fixture)."""
+    with pytest.MonkeyPatch.context() as patch:
+        folder = tmp_path_factory.mktemp("urpc-cache-session")
+        patch.setenv("URPC_CACHE_DIR", str(folder))
+        yield folder
+
+
+@pytest.fixture(autouse=True)
+def certificate_cache_dir(session_certificate_cache_dir, tmp_path_factory, monkeypatch) -> Path:
+    """A fresh, empty certificate cache folder for each test (``URPC_CACHE_DIR``; outside the
+    test's ``tmp_path``, which some tests list)."""
+    folder = tmp_path_factory.mktemp("urpc-cache")
+    monkeypatch.setenv("URPC_CACHE_DIR", str(folder))
+    return folder
 
 
 @pytest.fixture(scope="session")

@@ -20,7 +20,7 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -73,6 +73,15 @@ class Trajectory(ABC):
             f"{type(self).__name__} gives no jerk bound: implement jerk_bound(start, stop) "
             "(a bound of |d^3 q_d/dt^3| per joint over [start, stop]) to certify it"
         )
+
+    def fingerprint(self) -> dict[str, Any] | None:
+        """Every parameter that determines this reference (what :meth:`evaluate` and
+        :meth:`jerk_bound` read), as numbers, text and arrays: the certificate cache
+        (:mod:`urpc.control.certificate_key`) keys a certificate on it with the class's name.
+        ``None`` (the base class): not known, and the certificate is then computed every time.
+        A subclass that overrides :meth:`evaluate` or :meth:`jerk_bound` must define its own (the
+        cache ignores one inherited from above those methods)."""
+        return None
 
     def enclose(self, start, stop) -> tuple[np.ndarray, ...]:
         """The reference over whole time intervals ``[start, stop]`` [s] (arrays, one per cell):
@@ -158,6 +167,9 @@ class PaperTrajectory(Trajectory):
         peak = np.abs(self.amplitude) * 0.5 * ((np.pi / 2) ** 3 + (3 * np.pi / 2) ** 3)
         return np.broadcast_to(peak, np.shape(start) + (self.dof,))
 
+    def fingerprint(self) -> dict[str, Any]:
+        return {"amplitude": self.amplitude}
+
     def __repr__(self) -> str:
         return f"PaperTrajectory(amplitude={self.amplitude.tolist()})"
 
@@ -219,6 +231,14 @@ class SinusoidTrajectory(Trajectory):
     def peak_acceleration(self) -> np.ndarray:
         """``|A| (2 pi f)^2`` [rad/s^2] per joint."""
         return np.abs(self.amplitude) * (2 * np.pi * self.frequency) ** 2
+
+    def fingerprint(self) -> dict[str, Any]:
+        return {
+            "home": self.home,
+            "amplitude": self.amplitude,
+            "frequency": self.frequency,
+            "phase": self.phase,
+        }
 
     def __repr__(self) -> str:
         return (
@@ -292,6 +312,9 @@ class QuinticTrajectory(Trajectory):
             a = first[index]
             result[index] = peaks[a : max(a, last[index]) + 1].max(axis=0)
         return result
+
+    def fingerprint(self) -> dict[str, Any]:
+        return {"points": self.points, "times": self.times}
 
     def __repr__(self) -> str:
         return f"QuinticTrajectory(points={self.points.tolist()}, times={self.times.tolist()})"

@@ -23,6 +23,7 @@ from __future__ import annotations
 import re
 import threading
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -180,6 +181,19 @@ class FileTrajectory(Trajectory):
             final = int(np.clip(np.searchsorted(breaks, b, side="left") - 1, first, last))
             result[index] = bound[first : final + 1].max(axis=0)
         return result
+
+    def fingerprint(self) -> dict[str, Any]:
+        """The samples and the interpolating spline (its knots or breaks, coefficients, degree):
+        what :meth:`evaluate` and :meth:`jerk_bound` read."""
+        spline = self._spline
+        return {
+            "t": self.t,
+            "q": self.q,
+            "spline": type(spline).__name__,
+            "knots": getattr(spline, "t", getattr(spline, "x", None)),
+            "coefficients": spline.c,
+            "degree": getattr(spline, "k", None),
+        }
 
     def __repr__(self) -> str:
         return f"FileTrajectory({len(self.t)} samples, dof={self.dof}, t=[{self.t[0]:g}, {self.t[-1]:g}] s)"

@@ -13,6 +13,7 @@ from .common import (
     RESULTS_ROOT,
     ROBOT_HELP,
     UNCERTAINTY_HELP,
+    add_certificate_arguments,
     add_output_arguments,
     count,
     non_negative_float,
@@ -101,6 +102,7 @@ def register(commands) -> None:
         help="continue the campaign recorded in DIR (the same settings), running only the runs "
         "not yet recorded",
     )
+    add_certificate_arguments(p)
     add_output_arguments(
         p, str(RESULTS_ROOT / "campaign" / "SCENARIO"), what="records, runs, summary and histogram"
     )
@@ -128,6 +130,8 @@ def run_campaign_command(args) -> int:
             vertex_runs=args.vertex_runs,
             out=out,
             resume=args.resume,
+            certify=not args.no_certify,
+            refresh_certificate=args.no_cache,
         )
     except CampaignInterrupted as stop:
         print(
@@ -141,7 +145,7 @@ def run_campaign_command(args) -> int:
     if args.json:
         print_json({**summary, "out": str(out)})
         return EXIT_OK
-    print("\n".join(describe_summary(summary, out)))
+    print("\n".join(describe_summary(summary, out, result.certificate_source)))
     return EXIT_OK
 
 
@@ -200,6 +204,8 @@ def resume_command(args, out: Path) -> str:
     for option, value in options.items():
         if value is not None:
             argv += [option, repr(value) if isinstance(value, float) else str(value)]
+    flags = {"--no-certify": args.no_certify, "--no-cache": args.no_cache}
+    argv += [flag for flag, given in flags.items() if given]
     return shlex.join([*argv, "--resume"])
 
 
@@ -208,8 +214,9 @@ def default_out(scenario_name: str) -> Path:
     return RESULTS_ROOT / "campaign" / scenario_name
 
 
-def describe_summary(summary: dict, out: Path) -> list[str]:
-    """The text report of a campaign summary, one line per item."""
+def describe_summary(summary: dict, out: Path, certificate_source: str | None = None) -> list[str]:
+    """The text report of a campaign summary, one line per item (``certificate_source``: how
+    the certificate was obtained, :attr:`CampaignResult.certificate_source`)."""
     lines = [
         f"campaign {summary['scenario']}: {count(summary['runs'], 'run')} "
         f"({summary['vertex_runs']} of {count(summary['vertex_total'], 'vertex', 'vertices')}, "
@@ -221,6 +228,8 @@ def describe_summary(summary: dict, out: Path) -> list[str]:
         "  guarantee            "
         + ("certified" if summary["certified"] else summary["not_certified"]),
     ]
+    if certificate_source is not None:
+        lines.append(f"  certificate          {certificate_source}")
     if summary["diverged"] or summary["never_entered"]:
         lines.append(
             f"  diverged             {summary['diverged']}, never entered "

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..control.gain_search import KR_CANDIDATES
-from .common import EXIT_OK, print_json
+from .common import EXIT_OK, add_certificate_arguments, print_json, show_progress
 
 
 def register(commands) -> None:
@@ -19,7 +19,9 @@ def register(commands) -> None:
         "epsilon_floor (the smallest epsilon guaranteed at this period) [rad], "
         "max_sample_period (the largest period at which the requested epsilon is guaranteed) "
         "[s], and every condition with its value and limit.",
-        epilog="Exit code 0 whether or not the configuration is certified (the answer is the "
+        epilog="The certificate is computed once per configuration and read back from the "
+        "certificate cache after that (the last line says which; --no-cache computes it again). "
+        "Exit code 0 whether or not the configuration is certified (the answer is the "
         "output); 2 on bad input.",
     )
     add_scenario_arguments(p, simulate=False)
@@ -32,16 +34,32 @@ def register(commands) -> None:
         "costs one certificate",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_certificate_arguments(p, skippable=False)
+    p.add_argument(
+        "--no-progress",
+        action="store_true",
+        help="no progress line (shown only when stderr is a terminal)",
+    )
     p.set_defaults(handler=run_certify)
 
 
 def run_certify(args) -> int:
-    from ..studies.certification import certify_setup
+    from ..studies.certification import cached_setup
     from ..studies.scenario import build, build_controller
     from .simulate import scenario_from_arguments
 
     scenario = scenario_from_arguments(args)
     search = None
+
+    def certified(setup, controller=None):
+        return cached_setup(
+            setup,
+            controller or build_controller(setup, "interval"),
+            refresh=args.no_cache,
+            progress=show_progress(args),
+            announce=False,  # the last line of the output says it
+        )
+
     if args.search_kr:
         from ..control.gain_search import best_gain
         from ..errors import InputError
@@ -53,12 +71,13 @@ def run_certify(args) -> int:
                 "never certified, whatever Kr; give --sampled-law implicit",
                 field="sampled_law",
             )
+        outcomes = {}
 
         def certify_with(Kr: float):
-            options = {"interval": {"Kr": Kr}}
-            candidate = build(scenario.with_overrides(controller_options=options))
+            candidate = build(scenario.with_overrides(controller_options={"interval": {"Kr": Kr}}))
             controller = build_controller(candidate, "interval")
-            return controller, certify_setup(candidate, controller)
+            outcomes[Kr] = certified(candidate, controller)
+            return controller, outcomes[Kr].certificate
 
         def report(trial) -> None:
             if not args.json:
@@ -73,10 +92,10 @@ def run_certify(args) -> int:
         if not args.json:
             print(f"{scenario.name}: searching Kr ({len(KR_CANDIDATES)} certificates)")
         search = best_gain(certify_with, KR_CANDIDATES, report)
-        certificate = search.best.certificate
+        outcome = outcomes[search.best.Kr]
     else:
-        setup = build(scenario)
-        certificate = certify_setup(setup, build_controller(setup, "interval"))
+        outcome = certified(build(scenario))
+    certificate = outcome.certificate
     if args.json:
         extra = {} if search is None else {"kr_search": search.to_dict()}
         print_json({"scenario": scenario.name, **certificate.to_dict(), **extra})
@@ -92,4 +111,5 @@ def run_certify(args) -> int:
     advice = certificate.figures.get("advice")
     if advice:
         print(f"  {advice}")
+    print(f"certificate: {outcome.describe()}")
     return EXIT_OK

@@ -9,7 +9,9 @@ command-line convention (README, "Command line"):
   ``urpc-results/<job>`` for commands that always write (``simulate`` writes only with ``--out``);
 * options with a fixed set of values list them (``--plant {pinocchio,mujoco}``);
 * ``--json`` prints one JSON object on stdout; ``--no-progress`` turns off the progress bar,
-  which is shown only when stderr is a terminal.
+  which is shown only when stderr is a terminal;
+* a run computes its certificate first, once per configuration (the certificate cache):
+  ``--no-certify`` skips it, ``--no-cache`` computes it again.
 """
 
 from __future__ import annotations
@@ -185,6 +187,27 @@ def add_output_arguments(
         )
 
 
+#: Help of ``--no-certify`` and ``--no-cache`` (simulate, campaign; certify takes ``--no-cache``).
+NO_CERTIFY_HELP = (
+    "skip the certificate (computed before the run, seconds to minutes of CPU on a real arm): "
+    "the output then records certified: null and not_certified: 'not computed (--no-certify)', "
+    "never a verdict"
+)
+NO_CACHE_HELP = (
+    "compute the certificate again even when the certificate cache holds it, and replace the "
+    "record (the cache: $URPC_CACHE_DIR, else $XDG_CACHE_HOME/urpc or ~/.cache/urpc; "
+    "docs/sampled-data.md)"
+)
+
+
+def add_certificate_arguments(parser, *, skippable: bool = True) -> None:
+    """``--no-certify`` (with ``skippable``) and ``--no-cache``: the certificate a run computes
+    first (once per configuration: later runs read it from the certificate cache)."""
+    if skippable:
+        parser.add_argument("--no-certify", action="store_true", help=NO_CERTIFY_HELP)
+    parser.add_argument("--no-cache", action="store_true", help=NO_CACHE_HELP)
+
+
 def show_progress(args) -> bool:
     """The rule of every command: a progress bar on stderr only when stderr is a terminal, and
     not with ``--no-progress``."""
@@ -238,6 +261,7 @@ def print_json(payload: dict) -> None:
 
 
 def warn_uncertified(guarantee: dict) -> None:
-    """One ``warning:`` line on stderr when a run's configuration is not certified."""
-    if not guarantee["certified"]:
+    """One ``warning:`` line on stderr when a run's configuration is not certified (nothing when
+    its certificate was not computed, ``--no-certify``: the output says so)."""
+    if guarantee["certified"] is False:
         print(f"warning: {guarantee['not_certified']}", file=sys.stderr)

@@ -14,6 +14,7 @@ from .common import (
     RESULTS_ROOT,
     ROBOT_HELP,
     UNCERTAINTY_HELP,
+    add_certificate_arguments,
     add_output_arguments,
     count,
     joint_units,
@@ -48,13 +49,16 @@ def register(commands) -> None:
         "tracks a generic sinusoid inside the joint limits, the true plant is a seeded, "
         "physically consistent draw from the box (printed), epsilon is 1e-2 rad, the control "
         "period 1e-3 s, no disturbance, 10 s.",
-        epilog="Prints whether ||e|| < epsilon was met, the final error (max ||e|| over the last "
+        epilog="Computes the certificate of the configuration first (urpc certify), once: later "
+        "runs of the same configuration read it from the certificate cache. Prints whether "
+        "||e|| < epsilon was met, the final error (max ||e|| over the last "
         "second, or the last quarter of a run shorter than 4 s), the torque cost and the gains; "
         "--json prints them as one object; --out DIR (checked before the run) saves result.npz, "
         "result.csv, summary.json, certificate.json, scenario.yaml and the figures "
         "trajectory.png, error.png, torque.png and gains.png; --replay adds replay.html.",
     )
     add_scenario_arguments(p)
+    add_certificate_arguments(p.add_argument_group("certificate"))
     output = p.add_argument_group("output")
     add_output_arguments(output, None)
     output.add_argument("--replay", action="store_true", help=REPLAY_HELP)
@@ -148,7 +152,7 @@ def add_plant_argument(group, default: str) -> None:
 def run_simulate(args) -> int:
     from ..sim.metrics import describe_final_window
     from ..sim.plotting import plot_error, plot_gains, plot_torque, plot_trajectory
-    from ..studies.certification import certificate_fields
+    from ..studies.certification import guarantee_of
     from ..studies.scenario import build, build_controller, simulate_setup
 
     if args.out is not None:
@@ -159,7 +163,14 @@ def run_simulate(args) -> int:
     scenario = scenario_from_arguments(args)
     setup = build(scenario)
     controller = build_controller(setup)
-    guarantee = certificate_fields(setup, controller)
+    outcome = guarantee_of(
+        setup,
+        controller,
+        certify=not args.no_certify,
+        refresh=args.no_cache,
+        progress=show_progress(args),
+    )
+    guarantee = outcome.fields
     warn_uncertified(guarantee)
     result = simulate_setup(setup, controller, progress=show_progress(args))
     summary = {
@@ -207,7 +218,7 @@ def run_simulate(args) -> int:
     if args.json:
         print_json(summary)
         return EXIT_OK
-    _print_summary(result, scenario, setup, summary, args.out)
+    _print_summary(result, scenario, setup, summary, args.out, outcome.source_line)
     return EXIT_OK
 
 
@@ -263,7 +274,9 @@ def scenario_from_arguments(args):
     )
 
 
-def _print_summary(result, scenario, setup, summary: dict, out: Path | None) -> None:
+def _print_summary(
+    result, scenario, setup, summary: dict, out: Path | None, source: str | None
+) -> None:
     m = result.metrics
     epsilon = result.epsilon
     # Units follow the joints: rad and N m (revolute), m and N (prismatic), both for a mix.
@@ -296,6 +309,8 @@ def _print_summary(result, scenario, setup, summary: dict, out: Path | None) -> 
         )
     else:
         print(f"guarantee    {summary['not_certified']}")
+    if source is not None:
+        print(f"certificate  {source}")
     if m["met"]:
         print(
             f"result       MET: ||e|| < epsilon = {epsilon:g} {position} from t = "

@@ -24,16 +24,24 @@ ends below ``max(epsilon, epsilon_floor)``; the configuration is certified when
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
 
 from ..errors import InputError
-from ..jsonsafe import jsonable
+from ..jsonsafe import jsonable, non_finite_paths, restore_non_finite
 from ..trajectories import Trajectory
 from .cells import CellFloor
 from .interval import IntervalPassivityController
+
+#: Version of the argument and of the :class:`Certificate` it returns. Bump it whenever a change
+#: of this module, of :mod:`urpc.control.cells` or of :mod:`urpc.control.cell_bounds` changes a
+#: certificate (a bound, a condition, a figure, a default): the certificate cache
+#: (:mod:`urpc.control.certificate_cache`) keys every record on it, so that no certificate of an
+#: older argument is ever reused. (The key also holds urpc's version and a digest of its source.)
+CERTIFICATE_VERSION = 1
 
 
 @dataclass(frozen=True)
@@ -94,8 +102,35 @@ class Certificate:
         return f"{head}; fails: {first.name} ({first.explanation})"
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-ready fields; a non-finite number (an infinite floor) becomes ``None``."""
-        return jsonable(asdict(self))
+        """Plain JSON-ready fields; a non-finite number (an infinite floor) becomes ``None`` and
+        ``non_finite`` maps its JSON Pointer (``/epsilon_floor``, ``/conditions/0/value``,
+        ``/figures/margin``) to ``"inf"``, ``"-inf"`` or ``"nan"``, so that :meth:`from_dict`
+        rebuilds the certificate exactly."""
+        fields = asdict(self)
+        return {**jsonable(fields), "non_finite": non_finite_paths(fields)}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Certificate:
+        """The certificate of :meth:`to_dict`'s fields, non-finite numbers restored.
+
+        Raises:
+            InputError: a field is missing or of the wrong kind (names it).
+        """
+        try:
+            values = restore_non_finite(
+                {k: v for k, v in data.items() if k != "non_finite"}, data.get("non_finite", {})
+            )
+            conditions = tuple(Condition(**c) for c in values["conditions"])
+            return cls(
+                bool(values["certified"]), float(values["epsilon"]),
+                float(values["epsilon_floor"]), float(values["max_sample_period"]),
+                None if values["sample_period"] is None else float(values["sample_period"]),
+                str(values["law"]), conditions, dict(values.get("figures") or {}),
+            )  # fmt: skip
+        except KeyError as exc:
+            raise InputError(f"a certificate needs '{exc.args[0]}'", field=exc.args[0]) from None
+        except (TypeError, ValueError, AttributeError) as exc:
+            raise InputError(f"not a certificate's fields ({exc})", field="certificate") from None
 
 
 def certify(
@@ -105,8 +140,12 @@ def certify(
     duration: float,
     disturbance_bound: float | None = None,
     cells: int | None = None,
+    progress: Callable[[str], Any] | None = None,
 ) -> Certificate:
     """The certificate of ``controller`` tracking ``trajectory`` over ``[0, duration]`` [s].
+
+    A pure computation (nothing is read or written); :func:`urpc.control.certificate_cache.
+    cached_certify` computes it once per configuration and reuses it from a cache on disk.
 
     Args:
         controller: A synthesized interval controller (its robot, box, gains, period and law).
@@ -116,6 +155,8 @@ def certify(
         disturbance_bound: ``||d||`` bound [N m] the plant sees. Theorem 2 does not need it in
             continuous time, but the sampled-data floor does; defaults to the box's bound.
         cells: Number of cells of time (default: chosen from the reference's speed).
+        progress: Called with one short line as each stage of the sampled-data search starts
+            (``"enclosing 236 cells (||e|| <= 0.01, ||r|| <= 0.45)"``), or ``None``.
     """
     box = controller.bound.box
     d = box.disturbance_bound if disturbance_bound is None else float(disturbance_bound)
@@ -154,7 +195,7 @@ def certify(
             )
         )  # fmt: skip
     else:
-        search = _SampledSearch(floor_of, controller, d)
+        search = _SampledSearch(floor_of, controller, d, progress)
         floor, parts, quantities = search.floor()
         max_period = search.max_sample_period() if math.isfinite(d) else 0.0
         figures.update(floor_of.figures(quantities))
@@ -186,8 +227,15 @@ class _SampledSearch:
     saturated, and the error ends up below ``floor(rho)``. The cells are widened by
     ``2 T``, so that the same enclosures serve every period up to ``2 T``."""
 
-    def __init__(self, floor_of: CellFloor, controller: IntervalPassivityController, d: float):
+    def __init__(
+        self,
+        floor_of: CellFloor,
+        controller: IntervalPassivityController,
+        d: float,
+        progress: Callable[[str], Any] | None = None,
+    ):
         self.floor_of, self.controller, self.d = floor_of, controller, d
+        self.say = progress or (lambda message: None)
         self.T = controller.sample_period
         self.extension = 2.0 * self.T
         self.epsilon = controller.epsilon
@@ -198,6 +246,8 @@ class _SampledSearch:
         T = self.T if T is None else T
         r_max = 1.5 * float(self.controller.Kr.max()) * tube + 1e-6
         for _ in range(5):
+            cells = self.floor_of.cells
+            self.say(f"enclosing {cells} cells (||e|| <= {tube:.3g}, ||r|| <= {r_max:.3g})")
             quantities = self.floor_of.quantities(tube, r_max, self.extension)
             floor, parts, _ = self.least_tube(quantities, T)
             if not math.isfinite(floor) or parts["r_sup"] <= r_max:
@@ -224,6 +274,7 @@ class _SampledSearch:
         itself with ``||r||`` inside the enclosure: the states from which the floor is reached
         once the gains have saturated."""
         rho = quantities["tube"]
+        self.say(f"scanning the basin (||e|| <= {rho:.3g})")
         while rho > max(least, 1e-6 * quantities["tube"]):
             floor, parts = self.floor_of.floor_at(self.T, self.d, quantities, rho)
             if floor <= rho and parts.get("r_sup", math.inf) <= quantities["r_max"]:
@@ -257,6 +308,7 @@ class _SampledSearch:
         """The largest ``T <= 2 T_controller`` with a floor below ``epsilon`` in the tube
         ``||e|| <= epsilon`` (the cells' enclosures hold for every period up to ``2 T``)."""
         quantities = self.enclose(self.epsilon)  # cached from floor()
+        self.say("searching the largest sample period")
 
         def ok(T: float) -> bool:
             floor, parts, _ = self.least_tube(quantities, T)

@@ -47,6 +47,9 @@ class CampaignResult:
         wall_time: Wall time of the whole campaign [s], pool or client start-up included.
         certificate: :func:`~urpc.studies.certification.certificate_fields` of the scenario's
             controller (the same for every run: the box, reference and disturbance are shared).
+        certificate_source: How the certificate was obtained (``cached (key ...)``,
+            ``computed in 2.1 s, ...``), or ``None``; not part of :meth:`summary`, which is the
+            same either way.
     """
 
     scenario: Scenario
@@ -59,10 +62,13 @@ class CampaignResult:
     scheduler: str | None
     wall_time: float
     certificate: Mapping[str, Any]
+    certificate_source: str | None = None
 
     @property
-    def certified(self) -> bool:
-        return bool(self.certificate["certified"])
+    def certified(self) -> bool | None:
+        """Whether the scenario is certified; ``None`` when its certificate was not computed."""
+        value = self.certificate["certified"]
+        return None if value is None else bool(value)
 
     @property
     def runs(self) -> int:

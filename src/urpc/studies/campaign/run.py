@@ -13,9 +13,10 @@ import numpy as np
 
 from ... import __version__
 from ...atomic import check_writable
+from ...control.certificate_cache import CertificateCache
 from ...errors import InputError
 from ...model.parameter_box import JOINTS
-from ..certification import certificate_fields
+from ..certification import guarantee_of
 from ..pool import submit_all, worker_pool
 from ..scenario import Scenario, build, build_controller, load_scenario
 from .draws import checked_count, draw_runs
@@ -52,6 +53,9 @@ def run_campaign(
     connect_timeout: float = 10.0,
     out: str | Path | None = None,
     resume: bool = False,
+    certify: bool = True,
+    certificate_cache: bool | CertificateCache = True,
+    refresh_certificate: bool = False,
 ) -> CampaignResult:
     """Run ``runs`` closed-loop simulations of ``scenario`` with drawn true parameters,
     disturbance seeds and initial states (rules in the module docstring), in parallel.
@@ -75,6 +79,12 @@ def run_campaign(
         connect_timeout: Time allowed to reach the Dask scheduler [s].
         out: Campaign folder for the records and the outputs, or ``None`` (nothing written).
         resume: Continue the campaign recorded in ``out``.
+        certify: Compute the scenario's certificate first (once for every run); ``False``
+            records ``certified: None``, ``not_certified: "not computed (--no-certify)"``.
+        certificate_cache: ``True`` (the default folder), a
+            :class:`~urpc.control.certificate_cache.CertificateCache`, or ``False``: where the
+            certificate is read from when this configuration's was computed before.
+        refresh_certificate: Compute the certificate even when cached, and replace the record.
 
     Raises:
         InputError: a bad argument or scenario, an unreachable scheduler; with ``out``: a folder
@@ -98,7 +108,14 @@ def run_campaign(
     try:
         setup = build(scenario)
         # Bad controller options fail here, before any worker starts; one certificate for all.
-        guarantee = certificate_fields(setup, build_controller(setup))
+        guarantee = guarantee_of(
+            setup,
+            build_controller(setup),
+            certify=certify,
+            cache=certificate_cache,
+            refresh=refresh_certificate,
+            progress=progress is True,  # a callable counts runs, not the certificate's stages
+        )
         specs, draws = draw_runs(setup, runs, seed, ic_spread=ic_spread, vertex_runs=vertex_runs)
         if out is not None and store is None:
             store = CampaignStore.open(out, settings, resume=resume)
@@ -113,7 +130,8 @@ def run_campaign(
             workers=None if scheduler is not None else workers,
             scheduler=scheduler,
             wall_time=time.perf_counter() - start,
-            certificate=guarantee,
+            certificate=guarantee.fields,
+            certificate_source=guarantee.source_line,
         )
         if store is not None:
             result.save(out)  # still under the folder's lock
