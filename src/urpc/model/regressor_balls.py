@@ -253,7 +253,6 @@ class BallRegressor:
         minus = self.torques(qq, rates - unit, zero, parameters, gravity_scale=0.0)
         return (plus - minus).scaled(0.25).map(lambda x: np.moveaxis(x, -3, -1))
 
-
     def christoffel_matrices(self, q, parameters):
         """``C(q; e_k)`` for every unit velocity ``e_k`` and each model over the boxes of ``q``:
         ``batch + (k, P, dof, dof)``. Column ``i`` of ``C(q; e_k)`` is column ``k`` of
