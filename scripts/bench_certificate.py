@@ -2,6 +2,7 @@
 
     python scripts/bench_certificate.py            # UR5, Panda, a 30-link chain
     python scripts/bench_certificate.py --quick    # UR5 and a 10-link chain only
+    python scripts/bench_certificate.py --arms chain4,chain8,chain12   # the growth with n
 
 For each arm: the CPU time of ``urpc.certify`` (implicit law, 1 kHz, ``epsilon = 1e-2``, a 2 s
 generic reference, the arm's box) and of 1000 control steps of the same controller, measured side
@@ -86,8 +87,13 @@ def measure(name: str, folder: Path) -> dict:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="UR5 and a 10-link chain")
+    parser.add_argument(
+        "--arms", help="comma-separated arms instead (ur5, panda, chainN for an N-link chain)"
+    )
     args = parser.parse_args(argv)
     arms = ["ur5", "chain10"] if args.quick else ["ur5", "panda", "chain30"]
+    if args.arms:
+        arms = [name.strip() for name in args.arms.split(",") if name.strip()]
     print("| arm | dof | cells | certify [s CPU] | 1000 steps [s CPU] | ratio | outcome | "
           "floor [rad] | max period [ms] |")  # fmt: skip
     print("|---|---|---|---|---|---|---|---|---|")

@@ -56,6 +56,23 @@ def ur5():
     return load_robot("ur5")
 
 
+@pytest.fixture
+def counted(monkeypatch):
+    """The certificates actually computed (calls of urpc.control.certificate.certify), for the
+    tests of the certificate cache."""
+    from urpc.control import certificate as certificate_module
+
+    calls = []
+    real = certificate_module.certify
+
+    def counting(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(certificate_module, "certify", counting)
+    return calls
+
+
 @pytest.fixture(scope="session")
 def panda():
     return load_robot("panda", locked_joints=PANDA_FINGERS)

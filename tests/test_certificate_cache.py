@@ -38,20 +38,6 @@ DURATION = 0.2
 DISTURBANCE = 10.0
 
 
-@pytest.fixture
-def counted(monkeypatch):
-    """Counts the certificates actually computed (urpc.control.certificate.certify calls)."""
-    calls = []
-    real = certificate_module.certify
-
-    def counting(*args, **kwargs):
-        calls.append(1)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(certificate_module, "certify", counting)
-    return calls
-
-
 @pytest.fixture(scope="module")
 def base(rr, rr_box):
     """The base configuration: RR arm, shipped box, implicit law at 1 kHz."""

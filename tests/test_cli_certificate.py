@@ -16,7 +16,6 @@ import pytest
 
 from urpc.__main__ import main
 from urpc.cli.campaign import resume_command
-from urpc.control import certificate as certificate_module
 from urpc.control.certificate import Certificate
 
 #: The RR arm at 1 kHz with the implicit law, 0.2 s: a certificate of about half a second.
@@ -32,20 +31,6 @@ class _Terminal(io.StringIO):
 
     def isatty(self) -> bool:
         return True
-
-
-@pytest.fixture
-def counted(monkeypatch):
-    """The certificates actually computed (calls of urpc.control.certificate.certify)."""
-    calls = []
-    real = certificate_module.certify
-
-    def counting(*args, **kwargs):
-        calls.append(1)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(certificate_module, "certify", counting)
-    return calls
 
 
 def _run(capsys, *argv):
