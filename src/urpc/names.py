@@ -19,5 +19,8 @@ PLANT_BACKENDS = ("pinocchio", "mujoco")
 #: How a sampled interval controller runs: ``implicit`` (the certified sampled-data law of
 #: :mod:`urpc.control.interval`) or ``paper`` (the paper's law unchanged under the hold).
 SAMPLED_LAWS = ("implicit", "paper")
+#: The uniform error gains Kr [1/s] the certified synthesis of Kr tries
+#: (:func:`urpc.search_gains`, ``urpc certify --search-kr``).
+KR_CANDIDATES = (10.0, 15.0, 20.0, 30.0, 45.0, 60.0)
 #: Reference trajectories of a scenario file (:mod:`urpc.trajectories`).
 TRAJECTORY_KINDS = ("paper", "sinusoid", "quintic", "file", "waypoints")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..control.gain_search import KR_CANDIDATES
+from ..names import KR_CANDIDATES
 from .common import EXIT_OK, add_certificate_arguments, print_json, show_progress
 
 

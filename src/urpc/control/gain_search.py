@@ -16,13 +16,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from ..errors import InputError
+from ..names import KR_CANDIDATES  # the default of synthesis, 3 / sqrt(epsilon), is 30 at 1e-2
 from ..trajectories import Trajectory
 from .certificate import Certificate, certify
 from .interval import IntervalPassivityController
-
-#: The uniform gains tried [1/s] (the default of synthesis is ``3 / sqrt(epsilon)``, 30 for
-#: ``epsilon = 1e-2``).
-KR_CANDIDATES = (10.0, 15.0, 20.0, 30.0, 45.0, 60.0)
 
 
 @dataclass(frozen=True)
