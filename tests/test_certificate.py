@@ -166,7 +166,7 @@ def test_a_certified_floor_bounds_every_vertex_under_the_worst_disturbance(rr, r
     controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=period, Kr=30.0)
     certificate = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
     assert certificate.certified, certificate.summary()
-    worst = 0.0
+    worst, torque = 0.0, np.zeros(2)
     for vertex in range(8):
         result = urpc.simulate(
             rr_box.plant(rr, rr_box.vertex(vertex)), controller, PaperTrajectory(),
@@ -174,7 +174,11 @@ def test_a_certified_floor_bounds_every_vertex_under_the_worst_disturbance(rr, r
             disturbance="worst", controller_state0=_saturated(controller),
         )  # fmt: skip
         worst = max(worst, _final_error(result))
+        final = result.t >= result.t[-1] - 1.0
+        torque = np.maximum(torque, np.abs(result.torque[final]).max(axis=0))
     assert worst <= certificate.epsilon_floor, (worst, certificate.summary())
+    # The commanded torque once in the floor's regime stays below its bound, joint by joint.
+    assert np.all(torque <= np.array(certificate.figures["torque_bound"])), torque
 
 
 def test_the_floor_bounds_sampled_ur5_plants_under_the_worst_disturbance(ur5):
@@ -193,6 +197,9 @@ def test_the_floor_bounds_sampled_ur5_plants_under_the_worst_disturbance(ur5):
             disturbance="worst", controller_state0=_saturated(controller),
         )  # fmt: skip
         assert _final_error(result, 0.5) <= certificate.epsilon_floor, (k, certificate.summary())
+        final = result.t >= result.t[-1] - 0.5
+        bound = np.array(certificate.figures["torque_bound"])
+        assert np.all(np.abs(result.torque[final]).max(axis=0) <= bound), k
 
 
 def test_the_time_above_epsilon_before_saturation_is_bounded(rr, rr_box):

@@ -186,7 +186,7 @@ class CellFloor:
         if key in self._tube_cache:
             return self._tube_cache[key]
         cells = self.cells
-        q, qd_a, _, _ = self._states(tube, 0.0, extension)
+        q, qd_a, qdd_a, _ = self._states(tube, 0.0, extension)
         models, model_slopes = self._inertia_models(q.val)
         nominal, law = models[0], models[1]
         # d/dt w = (rate along the reference at a fixed e) + (Jacobian along e) ed.
@@ -208,6 +208,28 @@ class CellFloor:
             np.sum((np.abs(along_error.mid) + along_error.rad) ** 2, axis=1)
         )
         reference_velocity = self._states(0.0, 0.0, extension)[3]
+        # |tau_i| of every plant of the box at r = 0 over the tube (the rigid bodies by the
+        # regressor over the parameter hull, the tube by the Jacobian, the drives at their ends).
+        rigid = matvec(center, hull)
+        rigid_along = matvec(tube_jacobian, hull)
+        plant_torque = rigid.magnitude + tube * np.sqrt(np.sum(rigid_along.magnitude**2, axis=1))
+        plant_torque = plant_torque + self._drive_torque(qd_a, qdd_a)
+        # The law's nominal torque at r != 0 differs from its value at r = 0 by
+        # M0 Kr r - C0(q, r) qd_a = M0 Kr r - C0(q, qd_a) r (+ Ia0 Kr r): per joint at most
+        # (Kr ||M0 e_i|| + ||row_i C0(q, qd_a)|| + Ia0_i Kr) ||r||, with
+        # ||M0 e_i|| <= sqrt(lambda_max(M0) (M0)_ii) (M0 positive definite).
+        Kr_max = float(self.Kr.max())
+        eps0 = 1 + nominal.eps[:, None]
+        rows_M0 = np.sqrt(
+            eps0 * np.linalg.eigvalsh(nominal.center)[:, -1:]
+            * eps0 * np.diagonal(nominal.center, axis1=-2, axis2=-1)
+        )  # fmt: skip
+        C0 = self.regressor.coriolis_matrices(q.val, qd_a.val, pi0.mid[None])[:, 0]
+        rows_C0 = np.sqrt(np.sum(C0.magnitude**2, axis=-1))
+        per_r = Kr_max * rows_M0 * (1 + LAPACK_MARGIN) + rows_C0
+        joints = self.controller.bound.joints
+        if joints is not None:
+            per_r = per_r + joints.nominal[0] * Kr_max
         enclosed = {
             "reference_velocity": reference_velocity,
             "law": law,
@@ -221,6 +243,8 @@ class CellFloor:
                 * (1 + LAPACK_MARGIN),
                 "law_lam_L": law.lam_min * (1 - law.eps) * (1 - LAPACK_MARGIN),
                 "law_inverse_diagonal": np.diagonal(law.inverse, axis1=-2, axis2=-1),
+                "plant_torque": plant_torque * (1 + 1e-12),
+                "torque_per_r": per_r * (1 + 1e-12),
             },
             "pieces": [],
         }
@@ -281,6 +305,10 @@ class CellFloor:
                         "lam_L": lam_L, "lam_U": lam_U, "beta": beta, "nu": nu, "K": K,
                         "lag_e": lag_e, "lag_M_e": lag_M_e,
                         "R_links": np.array(per_link).reshape(len(links), 2, cells),
+                        # M_ii <= (1 + eps_U) (U_c)_ii: the plant's diagonal, for the torques.
+                        "upper_diagonal": np.diagonal(upper.center, axis1=-2, axis2=-1)
+                        * (1 + upper.eps[:, None])
+                        * (1 + LAPACK_MARGIN),
                     },
                 }
             )  # fmt: skip
@@ -353,6 +381,14 @@ class CellFloor:
         value = terms.armature * acceleration + terms.viscous * speed
         rate = terms.armature * qdd_a.dot.magnitude + terms.viscous * qd_a.dot.magnitude
         return value, rate
+
+    def _drive_torque(self, qd_a: Jet, qdd_a: Jet) -> np.ndarray | float:
+        """``|Ia qdd_a + Dv qd_a + f_c|`` [N m] of every drive of the box at ``r = 0``."""
+        joints = self.controller.bound.joints
+        if joints is None:
+            return 0.0
+        upper = joints.upper
+        return upper[0] * qdd_a.val.magnitude + upper[1] * qd_a.val.magnitude + upper[2]
 
     def _drive_torque_rate(self, qd_a: Jet, qdd_a: Jet) -> np.ndarray:
         joints = self.controller.bound.joints
@@ -465,6 +501,35 @@ class CellFloor:
         )
         return floor, parts
 
+    def torque_bound(
+        self, T: float, d: float, quantities: dict, tube: float, r_sup: float
+    ) -> np.ndarray:
+        """Per joint, a bound [N m] of the torque the law commands once ``||e||`` is within the
+        floor's regime (docs/sampled-data.md §3, "Torques"): with ``r = r* + r_d + delta``,
+        ``tau0 + K r* = tau0 + w`` is the plant's own torque, ``K r_d = sum_j M^1/2 A (1-A)^j
+        M^-1/2 d_j`` is at most ``sqrt(M_ii) S(a) d / sqrt(lambda_L)`` with
+        ``S(a) = sum_j max_{a <= x <= 1} x (1-x)^j``, and ``K delta = M^1/2 (A / T) M^1/2 delta``
+        at most ``sqrt(M_ii) ||delta||_M / T``; the law's nominal torque at ``r != 0`` adds
+        ``torque_per_r ||r||`` with ``||r|| <= r_sup``; the largest over the cells and pieces."""
+        d = d + self.joints.coulomb
+        D = self.gain(T)
+        bound = np.zeros(self.dof)
+        for p in quantities["pieces"]:
+            terms = self._cell_terms(T, d, D, quantities, p, tube)
+            margin = float(np.min(terms["margin"]))
+            if not np.all(p["valid"]) or not margin > 0:
+                return np.full(self.dof, math.inf)
+            delta_M = float(np.max(terms["pushed"])) / margin + float(np.max(terms["forcing"]))
+            root = np.sqrt(p["upper_diagonal"])
+            response = _response_sum(terms["contraction"]) * d / np.sqrt(p["lam_L"])
+            piece = (
+                quantities["plant_torque"]
+                + quantities["torque_per_r"] * r_sup
+                + root * (response[:, None] + delta_M / T)
+            )
+            bound = np.maximum(bound, piece.max(axis=0))
+        return bound * (1 + 1e-12)
+
     def dominant_link(self, quantities: dict, piece: int, cell: int, tube: float):
         """The uncertain link with the largest part of ``||M_L^-1 w||`` at a cell of a piece,
         and that part's share, or ``None`` without uncertain links."""
@@ -489,6 +554,20 @@ class CellFloor:
     def cell_time(self, cell: int) -> tuple[float, float]:
         """The time span [s] of a cell (before its widening)."""
         return float(self.edges[cell]), float(self.edges[cell + 1])
+
+
+def _response_sum(a: np.ndarray, terms: int = 4096) -> np.ndarray:
+    """``S(a) = sum_j max_{a <= x <= 1} x (1 - x)^j`` per entry of ``a`` (in (0, 1]): the sum
+    of ``||A (1 - A)^j||`` over the loop's memory for ``a I <= A <= I``. Each term is at its
+    maximum ``x = max(a, 1 / (j + 1))``; past ``terms`` the tail ``(1 - a)^terms`` is added
+    whole (it bounds ``sum_{j >= terms} a (1 - a)^j``, and ``1 / (j + 1) < a`` there once
+    ``terms >= 1 / a``; for smaller ``a`` the remaining harmonic terms are bounded by
+    ``sum_{j >= terms} 1 / (j + 1)``, infinite, so ``a`` below ``1 / terms`` gives ``inf``)."""
+    a = np.asarray(a, dtype=float)
+    j = np.arange(terms)[:, None]
+    x = np.maximum(a[None], 1.0 / (j + 1))
+    total = np.sum(x * (1 - x) ** j, axis=0) + (1 - a) ** terms
+    return np.where(a * terms >= 1.0, total * (1 + 1e-12), math.inf)
 
 
 def split_box(box: ParameterBox, pieces: int = PIECES) -> list[ParameterBox]:

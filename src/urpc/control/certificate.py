@@ -97,7 +97,8 @@ class Certificate:
             f"max sample period {self.max_sample_period:.3g} s"
         )
         if self.certified:
-            return head
+            note = self.figures.get("torque_note")
+            return head if note is None else f"{head}; {note}"
         first = self.failed[0]
         return f"{head}; fails: {first.name} ({first.explanation})"
 
@@ -201,6 +202,8 @@ def certify(
         figures.update(floor_of.figures(quantities))
         figures.update(parts)
         figures.update(search.report(floor, parts, quantities))
+        if math.isfinite(floor):
+            figures.update(_torque_figures(floor_of, controller, d, quantities, parts))
         conditions += _sampled_conditions(figures, floor, controller.epsilon, max_period)
     holds = all(c.holds for c in conditions) and floor <= controller.epsilon
     if not holds and law == "implicit":
@@ -351,6 +354,32 @@ class _SampledSearch:
             #: Before the gains saturate, ||e_k|| >= epsilon for at most s_max / epsilon seconds.
             out["time_above_epsilon_before_saturation"] = s_max / self.epsilon
         return out
+
+
+def _torque_figures(floor_of, controller, d: float, quantities: dict, parts: dict) -> dict:
+    """The bound of the commanded torque per joint once in the floor's regime, against the
+    URDF's effort limits (a non-positive or infinite limit counts as none). Not a condition of
+    ``certified``: a torque the argument cannot keep below the limit is reported, with the
+    joint, in ``torque_note`` and the summary."""
+    T = controller.sample_period
+    bound = floor_of.torque_bound(T, d, quantities, parts["tube"], parts["r_sup"])
+    effort = np.asarray(controller.robot.model.effortLimit, dtype=float)
+    limited = np.isfinite(effort) & (effort > 0)
+    out: dict[str, Any] = {"torque_bound": bound.tolist(), "torques_within_limits": True}
+    if not np.any(limited):
+        out["torques_within_limits"] = None
+        return out
+    ratio = np.where(limited, bound / np.where(limited, effort, 1.0), 0.0)
+    worst = int(np.argmax(ratio))
+    if ratio[worst] > 1.0:
+        joint = controller.robot.joint_names[worst]
+        out["torques_within_limits"] = False
+        out["torque_note"] = (
+            f"torques within the effort limits not proven: joint '{joint}' bound "
+            f"{bound[worst]:.4g} N m > effort {effort[worst]:.4g} N m (the argument assumes an "
+            "unclipped torque)"
+        )
+    return out
 
 
 #: What each term of the floor is, for the advice.
