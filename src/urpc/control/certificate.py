@@ -41,7 +41,7 @@ from .interval import IntervalPassivityController
 #: certificate (a bound, a condition, a figure, a default): the certificate cache
 #: (:mod:`urpc.control.certificate_cache`) keys every record on it, so that no certificate of an
 #: older argument is ever reused. (The key also holds urpc's version and a digest of its source.)
-CERTIFICATE_VERSION = 1
+CERTIFICATE_VERSION = 2
 
 
 @dataclass(frozen=True)
