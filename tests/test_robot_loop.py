@@ -129,3 +129,115 @@ def test_delayed_law_meets_epsilon_on_vertex_plants_with_a_one_sample_delay(rr, 
     assert report.ok
     metrics = loop.result().metrics
     assert metrics["met"], metrics["final_error"]
+
+
+# ---------------------------------------------------------------- the controller's own diagnostics
+def _drive(loop, steps=40):
+    """``steps`` loop steps 3 mrad off the paper's trajectory (no plant: the log is the point)."""
+    trajectory = urpc.PaperTrajectory()
+    for k in range(steps):
+        reference = trajectory.reference(k * 1e-3)
+        loop.step(k * 1e-3, reference.q + 3e-3, reference.qd)
+    return loop
+
+
+def _loop_and_simulation(controller, steps=40):
+    loop = _drive(ControlLoop(controller, urpc.PaperTrajectory(), period=1e-3, epsilon=1e-2), steps)
+    robot = urpc.load_robot("rr_planar")
+    simulated = urpc.simulate(
+        robot, controller, urpc.PaperTrajectory(), duration=(steps - 1) * 1e-3,
+        q0=urpc.PaperTrajectory().reference(0.0).q + 3e-3, epsilon=1e-2,
+    )  # fmt: skip
+    return loop, simulated
+
+
+def _r_alpha():
+    from urpc.control.r_alpha import PAPER_BETAS, synthesize_r_alpha
+
+    robot = urpc.load_robot("rr_planar")
+    box = urpc.load_uncertainty("rr_planar", robot)
+    return synthesize_r_alpha(robot, box, betas=PAPER_BETAS, sample_period=1e-3)
+
+
+def _interval(delay=0):
+    robot = urpc.load_robot("rr_planar")
+    box = urpc.load_uncertainty("rr_planar", robot)
+    return urpc.synthesize(robot, box, 1e-2, sample_period=1e-3, delay=delay)
+
+
+@pytest.mark.parametrize("kind", ["interval", "delayed", "loaded", "r-alpha"])
+def test_loop_logs_exactly_the_controllers_declared_diagnostics(kind, tmp_path):
+    """Whatever the law, the loop's log, ``last`` and saved result carry exactly the names of the
+    controller's ``diagnostic_units`` (with those units, as ``urpc simulate`` writes them); a law
+    that declares none gets no diagnostic columns at all, not empty or NaN ones."""
+    if kind == "r-alpha":
+        controller = _r_alpha()
+    elif kind == "loaded":
+        _interval().save(tmp_path / "c.json")
+        controller = urpc.load_controller(tmp_path / "c.json")
+    else:
+        controller = _interval(delay=1 if kind == "delayed" else 0)
+    declared = dict(type(controller).diagnostic_units)
+    assert declared == ({} if kind == "r-alpha" else {"phi": "N m s/rad", "kappa": "s/rad"})
+    loop, simulated = _loop_and_simulation(controller)
+    result = loop.result()
+    assert set(result.diagnostics) == set(declared) == set(simulated.diagnostics)
+    assert result.info.get("diagnostic_units") == simulated.info.get("diagnostic_units")
+    assert result.info.get("diagnostic_units", {}) == declared
+    series = loop.series()
+    for name in declared:
+        assert np.all(np.isfinite(series[name])) and np.isfinite(loop.last[name])
+    rho = kind != "r-alpha"  # the interval law reports ||rho|| (last_rho_norm); r-alpha does not
+    assert ("rho_norm" in series) is rho and ("rho_norm" in loop.last) is rho
+    assert set(loop.last) == {"e", *declared, *(("rho_norm",) if rho else ()), "step_time"}
+    assert not {"phi", "kappa"} & (set(series) - set(declared))
+    result.save(tmp_path / "run")
+    header = (tmp_path / "run" / "result.csv").read_text().splitlines()[0].split(",")
+    assert [c for c in header if c in ("phi", "kappa")] == list(declared)
+    back = SimulationResult.load(tmp_path / "run")
+    assert set(back.diagnostics) == set(declared)
+    assert back.info.get("diagnostic_units", {}) == declared
+
+
+def test_loop_logs_a_controllers_own_diagnostic_names_sample_by_sample():
+    """A law with diagnostics of its own names: the loop logs them, evaluated at each sample's
+    state as the simulator does (here the state counts the samples), and nothing else."""
+    from urpc.control.base import Controller
+
+    class Counting(Controller):
+        name = "counting"
+        diagnostic_units = {"samples_seen": "1", "half": "s"}
+        n_states = 1
+        sample_period = 1e-3
+
+        def output(self, t, q, qd, reference, state):
+            return np.zeros(len(q))
+
+        def advance(self, t, q, qd, reference, state):
+            return state + 1.0
+
+        def diagnostics(self, state):
+            return {"samples_seen": float(state[0]), "half": 0.5 * float(state[0])}
+
+    loop = _drive(ControlLoop(Counting(), urpc.PaperTrajectory(), epsilon=1e-2), 25)
+    series = loop.series()
+    assert np.array_equal(series["samples_seen"], np.arange(25.0))
+    assert np.array_equal(series["half"], 0.5 * np.arange(25.0))
+    assert set(loop.last) == {"e", "samples_seen", "half", "step_time"}
+    result = loop.result()
+    assert set(result.diagnostics) == {"samples_seen", "half"}
+    assert result.info["diagnostic_units"] == {"samples_seen": "1", "half": "s"}
+    assert "phi" not in series and "rho_norm" not in series
+
+    class Clashing(Counting):
+        diagnostic_units = {"q": "rad"}
+
+    with pytest.raises(urpc.InputError, match="field 'diagnostic_units'.*'q'"):
+        ControlLoop(Clashing(), urpc.PaperTrajectory())
+
+    class Continuous(Counting):
+        sample_period = None
+
+    with pytest.raises(ValueError, match="the loop needs a period"):
+        ControlLoop(Continuous(), urpc.PaperTrajectory())
+    assert ControlLoop(Continuous(), urpc.PaperTrajectory(), period=1e-3).period == 1e-3
