@@ -7,7 +7,8 @@ sampled simulator (:mod:`urpc.sim.sampled`) calls them, plus one row of the log 
 arrays). It knows nothing about the robot or the clock of the cycle: the safety layer, the
 watchdog and the robot's I/O are :func:`urpc.robot.runner.run`'s. The log becomes a
 :class:`~urpc.sim.results.SimulationResult` (:meth:`ControlLoop.result`), saved to the same files
-as ``urpc simulate --out``.
+as ``urpc simulate --out``. Optionally (``velocity_filter_hz``, default off) the measured velocity
+passes a first-order low-pass before the controller sees it (:meth:`ControlLoop.filter_velocity`).
 """
 
 from __future__ import annotations
@@ -39,6 +40,9 @@ class ControlLoop:
         epsilon: The precision a run is judged against [rad]; default: the controller's.
         capacity: Rows the log holds before it grows.
         clock: The timer of ``step``'s own duration (``time.perf_counter``).
+        velocity_filter_hz: Cutoff ``f_c`` [Hz] of a first-order low-pass on the measured
+            velocity before the controller sees it, or ``None`` (default): no filter, the
+            controller gets the robot's ``qd`` unchanged. See :meth:`filter_velocity`.
 
     Attributes:
         last: Diagnostics of the latest step: ``e`` (``||e||`` [rad]), then the controller's
@@ -60,6 +64,7 @@ class ControlLoop:
         epsilon: float | None = None,
         capacity: int = DEFAULT_CAPACITY,
         clock=time.perf_counter,
+        velocity_filter_hz: float | None = None,
     ):
         self.controller = controller
         self.trajectory = trajectory
@@ -72,6 +77,20 @@ class ControlLoop:
         self.epsilon = math.nan if epsilon is None else float(epsilon)
         self.dof = trajectory.dof
         self._clock = clock
+        self.velocity_filter_hz = velocity_filter_hz
+        self._omega = None  # 2 pi f_c [rad/s] of the velocity filter, None: off
+        if velocity_filter_hz is not None:
+            try:
+                cutoff = float(velocity_filter_hz)
+            except (TypeError, ValueError):
+                cutoff = math.nan
+            if not (math.isfinite(cutoff) and cutoff > 0):
+                raise InputError(
+                    f"{velocity_filter_hz!r} must be a finite cutoff > 0 [Hz], or None (no filter)",
+                    field="velocity_filter_hz",
+                )
+            self.velocity_filter_hz = cutoff
+            self._omega = 2.0 * math.pi * cutoff
         # The controller's own diagnostics, as the simulator logs them (urpc.sim.sampled): the
         # names of its declaration, in order, evaluated at the sample's state.
         self._names = tuple(controller.diagnostic_units)
@@ -79,7 +98,7 @@ class ControlLoop:
         units = dict(controller.diagnostic_units)
         if self._rho:
             units.setdefault("rho_norm", "N m")
-        taken = set(_SERIES) | set(_SCALARS) | {"clipped", "e"}
+        taken = set(_SERIES) | set(_SCALARS) | {"clipped", "e", "qd_filtered"}
         clash = [name for name in self._names if name in taken]
         if clash:
             raise InputError(
@@ -95,19 +114,50 @@ class ControlLoop:
         """Back to the controller's initial state and an empty log."""
         self.state = self.controller.initial_state()
         self.samples = 0
-        self._log = {name: np.empty((self._capacity, self.dof)) for name in _SERIES}
+        series = _SERIES + (("qd_filtered",) if self._omega is not None else ())
+        self._log = {name: np.empty((self._capacity, self.dof)) for name in series}
         scalars = ("t", *self._names, *(("rho_norm",) if self._rho else ()), "step_time")
         self._log.update({name: np.full(self._capacity, np.nan) for name in scalars})
         self._log["clipped"] = np.zeros(self._capacity, dtype=bool)
         self.last: dict[str, float] = {name: math.nan for name in ("e", *scalars[1:])}
         self._logged_of: np.ndarray | None = None
         self._values = [math.nan] * len(self._names)
+        self._filtered: np.ndarray | None = None  # the velocity filter's output and its time
+        self._filtered_t = math.nan
+
+    def filter_velocity(self, t: float, qd: np.ndarray) -> np.ndarray:
+        """The velocity the controller sees at loop time ``t`` [s]: ``qd`` itself without a
+        filter; with one, per joint the first-order low-pass ``tau dy/dt = qd - y``
+        (``tau = 1 / (2 pi f_c)``) discretized exactly for an input held over each step::
+
+            y_k = y_{k-1} + a (qd_k - y_{k-1}),    a = 1 - exp(-2 pi f_c (t_k - t_{k-1}))
+
+        starting at ``y_0 = qd_0`` (no start-up transient), so a step of the input is followed
+        by ``1 - exp(-2 pi f_c t)`` at the samples. The actual time between samples is used, so
+        a lost sample is a longer step, not a shorter lag. A sample at the same time as the
+        previous one leaves ``y`` unchanged."""
+        if self._omega is None:
+            return qd
+        previous = self._filtered
+        if previous is None:
+            filtered = np.array(qd, dtype=float)
+        else:
+            dt = t - self._filtered_t
+            a = -math.expm1(-self._omega * dt) if dt > 0 else 0.0
+            filtered = previous + a * (qd - previous)
+        self._filtered, self._filtered_t = filtered, t
+        return filtered
 
     def step(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The torque [N m] for the sample ``(q, qd)`` at loop time ``t`` [s]; advances the
-        controller's state by one period and logs the sample."""
+        controller's state by one period and logs the sample. ``qd`` is the measured velocity;
+        with ``velocity_filter_hz`` the controller gets its filtered value
+        (:meth:`filter_velocity`), logged as ``qd_filtered`` next to the measured ``qd``."""
         tic = self._clock()
         controller, state = self.controller, self.state
+        measured = qd
+        if self._omega is not None:
+            qd = self.filter_velocity(t, qd)
         reference = self.trajectory.reference(t)
         tau = controller.output(t, q, qd, reference, state)
         self.state = controller.advance(t, q, qd, reference, state)
@@ -117,7 +167,9 @@ class ControlLoop:
         log = self._log
         log["t"][k] = t
         log["q"][k] = q
-        log["qd"][k] = qd
+        log["qd"][k] = measured
+        if self._omega is not None:
+            log["qd_filtered"][k] = qd
         log["q_desired"][k] = reference.q
         log["qd_desired"][k] = reference.qd
         log["torque"][k] = tau
@@ -158,8 +210,10 @@ class ControlLoop:
     def series(self) -> dict[str, np.ndarray]:
         """The logged series (copies), one row per step: ``t``, ``q``, ``qd``, ``q_desired``,
         ``qd_desired``, ``torque`` (the controller's), ``torque_sent`` (what the robot got),
-        ``clipped``, ``step_time``, and one per name of :attr:`diagnostic_units` (the
-        controller's diagnostics, ``rho_norm`` when it reports it)."""
+        ``clipped``, ``step_time``, ``qd_filtered`` (with a velocity filter: what the controller
+        got; ``qd`` is always the measured velocity), and one per name of
+        :attr:`diagnostic_units` (the controller's diagnostics, ``rho_norm`` when it reports
+        it)."""
         return {name: array[: self.samples].copy() for name, array in self._log.items()}
 
     def step_time_percentiles(self) -> dict[str, float]:
@@ -210,7 +264,10 @@ class ControlLoop:
 
     def _units_info(self) -> dict[str, Any]:
         units = self.controller.diagnostic_units
-        return {"diagnostic_units": dict(units)} if units else {}
+        info: dict[str, Any] = {"diagnostic_units": dict(units)} if units else {}
+        if self._omega is not None:
+            info["velocity_filter_hz"] = self.velocity_filter_hz
+        return info
 
 
 def percentiles(times: np.ndarray) -> dict[str, float]:
