@@ -129,3 +129,216 @@ def test_delayed_law_meets_epsilon_on_vertex_plants_with_a_one_sample_delay(rr, 
     assert report.ok
     metrics = loop.result().metrics
     assert metrics["met"], metrics["final_error"]
+
+
+# ---------------------------------------------------------------- the controller's own diagnostics
+def _drive(loop, steps=40):
+    """``steps`` loop steps 3 mrad off the paper's trajectory (no plant: the log is the point)."""
+    trajectory = urpc.PaperTrajectory()
+    for k in range(steps):
+        reference = trajectory.reference(k * 1e-3)
+        loop.step(k * 1e-3, reference.q + 3e-3, reference.qd)
+    return loop
+
+
+def _loop_and_simulation(controller, steps=40):
+    loop = _drive(ControlLoop(controller, urpc.PaperTrajectory(), period=1e-3, epsilon=1e-2), steps)
+    robot = urpc.load_robot("rr_planar")
+    simulated = urpc.simulate(
+        robot, controller, urpc.PaperTrajectory(), duration=(steps - 1) * 1e-3,
+        q0=urpc.PaperTrajectory().reference(0.0).q + 3e-3, epsilon=1e-2,
+    )  # fmt: skip
+    return loop, simulated
+
+
+def _r_alpha():
+    from urpc.control.r_alpha import PAPER_BETAS, synthesize_r_alpha
+
+    robot = urpc.load_robot("rr_planar")
+    box = urpc.load_uncertainty("rr_planar", robot)
+    return synthesize_r_alpha(robot, box, betas=PAPER_BETAS, sample_period=1e-3)
+
+
+def _interval(delay=0):
+    robot = urpc.load_robot("rr_planar")
+    box = urpc.load_uncertainty("rr_planar", robot)
+    return urpc.synthesize(robot, box, 1e-2, sample_period=1e-3, delay=delay)
+
+
+@pytest.mark.parametrize("kind", ["interval", "delayed", "loaded", "r-alpha"])
+def test_loop_logs_exactly_the_controllers_declared_diagnostics(kind, tmp_path):
+    """Whatever the law, the loop's log, ``last`` and saved result carry exactly the names of the
+    controller's ``diagnostic_units`` (with those units, as ``urpc simulate`` writes them); a law
+    that declares none gets no diagnostic columns at all, not empty or NaN ones."""
+    if kind == "r-alpha":
+        controller = _r_alpha()
+    elif kind == "loaded":
+        _interval().save(tmp_path / "c.json")
+        controller = urpc.load_controller(tmp_path / "c.json")
+    else:
+        controller = _interval(delay=1 if kind == "delayed" else 0)
+    declared = dict(type(controller).diagnostic_units)
+    assert declared == ({} if kind == "r-alpha" else {"phi": "N m s/rad", "kappa": "s/rad"})
+    loop, simulated = _loop_and_simulation(controller)
+    result = loop.result()
+    assert set(result.diagnostics) == set(declared) == set(simulated.diagnostics)
+    assert result.info.get("diagnostic_units") == simulated.info.get("diagnostic_units")
+    assert result.info.get("diagnostic_units", {}) == declared
+    series = loop.series()
+    for name in declared:
+        assert np.all(np.isfinite(series[name])) and np.isfinite(loop.last[name])
+    rho = kind != "r-alpha"  # the interval law reports ||rho|| (last_rho_norm); r-alpha does not
+    assert ("rho_norm" in series) is rho and ("rho_norm" in loop.last) is rho
+    assert set(loop.last) == {"e", *declared, *(("rho_norm",) if rho else ()), "step_time"}
+    assert not {"phi", "kappa"} & (set(series) - set(declared))
+    result.save(tmp_path / "run")
+    header = (tmp_path / "run" / "result.csv").read_text().splitlines()[0].split(",")
+    assert [c for c in header if c in ("phi", "kappa")] == list(declared)
+    back = SimulationResult.load(tmp_path / "run")
+    assert set(back.diagnostics) == set(declared)
+    assert back.info.get("diagnostic_units", {}) == declared
+
+
+def test_loop_logs_a_controllers_own_diagnostic_names_sample_by_sample():
+    """A law with diagnostics of its own names: the loop logs them, evaluated at each sample's
+    state as the simulator does (here the state counts the samples), and nothing else."""
+    from urpc.control.base import Controller
+
+    class Counting(Controller):
+        name = "counting"
+        diagnostic_units = {"samples_seen": "1", "half": "s"}
+        n_states = 1
+        sample_period = 1e-3
+
+        def output(self, t, q, qd, reference, state):
+            return np.zeros(len(q))
+
+        def advance(self, t, q, qd, reference, state):
+            return state + 1.0
+
+        def diagnostics(self, state):
+            return {"samples_seen": float(state[0]), "half": 0.5 * float(state[0])}
+
+    loop = _drive(ControlLoop(Counting(), urpc.PaperTrajectory(), epsilon=1e-2), 25)
+    series = loop.series()
+    assert np.array_equal(series["samples_seen"], np.arange(25.0))
+    assert np.array_equal(series["half"], 0.5 * np.arange(25.0))
+    assert set(loop.last) == {"e", "samples_seen", "half", "step_time"}
+    result = loop.result()
+    assert set(result.diagnostics) == {"samples_seen", "half"}
+    assert result.info["diagnostic_units"] == {"samples_seen": "1", "half": "s"}
+    assert "phi" not in series and "rho_norm" not in series
+
+    class Clashing(Counting):
+        diagnostic_units = {"q": "rad"}
+
+    with pytest.raises(urpc.InputError, match="field 'diagnostic_units'.*'q'"):
+        ControlLoop(Clashing(), urpc.PaperTrajectory())
+
+    class Continuous(Counting):
+        sample_period = None
+
+    with pytest.raises(ValueError, match="the loop needs a period"):
+        ControlLoop(Continuous(), urpc.PaperTrajectory())
+    assert ControlLoop(Continuous(), urpc.PaperTrajectory(), period=1e-3).period == 1e-3
+
+
+# ---------------------------------------------------------------- the velocity filter
+def _echo_loop(**options):
+    """A loop whose controller commands the velocity it is given: its torque is what the
+    controller saw."""
+    from urpc.control.base import Controller
+
+    class Echo(Controller):
+        name = "echo"
+        sample_period = 1e-3
+
+        def output(self, t, q, qd, reference, state):
+            return np.array(qd, dtype=float)
+
+    return ControlLoop(Echo(), urpc.PaperTrajectory(), epsilon=1e-2, **options)
+
+
+def _feed(loop, velocities, times=None):
+    times = np.arange(len(velocities)) * loop.period if times is None else times
+    q = np.zeros(loop.dof)
+    return np.array([loop.step(t, q, qd) for t, qd in zip(times, velocities, strict=True)])
+
+
+def test_velocity_filter_step_response_is_the_first_order_closed_form():
+    """A velocity step (0 -> (1, -2) at t = 0 after one sample at rest) through the 50 Hz filter:
+    the controller sees (1 - exp(-2 pi 50 t)) (1, -2) at every sample, the continuous first-order
+    filter's response; the log keeps the measured step as qd."""
+    f_c, T = 50.0, 1e-3
+    loop = _echo_loop(velocity_filter_hz=f_c)
+    steps = 200
+    velocities = np.vstack([np.zeros((1, 2)), np.tile([1.0, -2.0], (steps, 1))])
+    seen = _feed(loop, velocities)
+    t = np.arange(steps + 1) * T
+    expected = (1.0 - np.exp(-2 * np.pi * f_c * t))[:, None] * np.array([1.0, -2.0])
+    assert np.max(np.abs(seen - expected)) < 1e-12
+    series = loop.series()
+    assert np.array_equal(series["qd"], velocities) and np.array_equal(series["qd_filtered"], seen)
+    assert loop.result().info["velocity_filter_hz"] == f_c
+
+
+def test_velocity_filter_lags_a_ramp_by_its_time_constant():
+    """A velocity ramp (constant acceleration c) lags behind by the closed form of the discrete
+    first-order filter, e_k = e (1 - (1 - a)^k) with e = c T (1 - a) / a, a = 1 - exp(-2 pi f_c T):
+    c (1 / (2 pi f_c) - T / 2), the continuous filter's lag less half a sample: the velocity
+    error the filter adds."""
+    f_c, T, c = 20.0, 1e-3, 3.0
+    loop = _echo_loop(velocity_filter_hz=f_c)
+    k = np.arange(400)
+    ramp = c * k * T
+    seen = _feed(loop, np.column_stack([ramp, -ramp]))[:, 0]
+    a = 1.0 - np.exp(-2 * np.pi * f_c * T)
+    lag = c * T * (1 - a) / a
+    assert np.max(np.abs((ramp - seen) - lag * (1 - (1 - a) ** k))) < 1e-12
+    assert lag == pytest.approx(c * (1 / (2 * np.pi * f_c) - T / 2), rel=2e-3)
+
+
+def test_velocity_filter_uses_the_time_between_samples_and_resets():
+    """A lost sample is a step of two periods (a = 1 - exp(-2 pi f_c 2T)); reset() forgets the
+    filter's state; without a filter the controller sees the measured qd itself."""
+    f_c = 30.0
+    loop = _echo_loop(velocity_filter_hz=f_c)
+    seen = _feed(loop, [np.zeros(2), np.ones(2), np.ones(2)], times=[0.0, 2e-3, 3e-3])
+    y1 = 1 - np.exp(-2 * np.pi * f_c * 2e-3)
+    assert seen[1] == pytest.approx([y1, y1], abs=1e-15)
+    assert seen[2] == pytest.approx(1 - (1 - y1) * np.exp(-2 * np.pi * f_c * 1e-3), abs=1e-15)
+    loop.reset()
+    assert np.array_equal(_feed(loop, [np.full(2, 5.0)]), [[5.0, 5.0]])  # y_0 = qd_0 again
+    plain = _echo_loop()
+    velocities = np.random.default_rng(0).standard_normal((20, 2))
+    assert np.array_equal(_feed(plain, velocities), velocities)
+    assert "qd_filtered" not in plain.series()
+    assert "velocity_filter_hz" not in plain.result().info
+
+
+@pytest.mark.parametrize("bad", [0.0, -5.0, float("nan"), float("inf"), "fast"])
+def test_velocity_filter_refuses_a_bad_cutoff_naming_the_field(bad):
+    with pytest.raises(urpc.InputError, match="field 'velocity_filter_hz'") as info:
+        _echo_loop(velocity_filter_hz=bad)
+    assert "\n" not in str(info.value)
+
+
+def test_velocity_filter_white_noise_variance_is_the_closed_form():
+    """White noise of unit variance leaves the filter with variance a / (2 - a) (the sum of the
+    squared impulse response a (1 - a)^k), here at 100 Hz and 1 kHz: 0.304. 4000 independent
+    channels through filter_velocity, past the transient."""
+    f_c, T = 100.0, 1e-3
+    loop = _echo_loop(velocity_filter_hz=f_c)
+    noise = np.random.default_rng(1).standard_normal((600, 4000))
+    out = np.array([loop.filter_velocity(k * T, x) for k, x in enumerate(noise)])[100:]
+    a = 1.0 - np.exp(-2 * np.pi * f_c * T)
+    assert np.var(out) == pytest.approx(a / (2 - a), rel=0.02)
+
+
+def test_run_refuses_a_bad_velocity_filter_in_one_line(capsys):
+    from urpc.__main__ import main
+
+    argv = ["run", "rr_planar/s3_ic1", "--robot-address", "udp://127.0.0.1:9"]
+    assert main([*argv, "--velocity-filter", "0"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "--velocity-filter" in err

@@ -7,6 +7,8 @@ import subprocess
 import sys
 import time
 
+import pytest
+
 URPC = [sys.executable, "-m", "urpc"]
 
 
@@ -42,8 +44,15 @@ def finish(process, timeout=60):
 LENIENT = ["--late-budget", "100000", "--deadline-ms", "50"]
 
 
-def test_run_meets_epsilon_against_the_virtual_robot():
-    robot, port = start_robot()
+@pytest.mark.parametrize(
+    "robot_options",
+    [[], ["--first-seq", str(2**32 - 300)]],
+    ids=["seq-from-0", "seq-across-the-32-bit-wrap"],
+)
+def test_run_meets_epsilon_against_the_virtual_robot(robot_options):
+    """Also with the robot's sequence numbers wrapping (2**32 - 1, then 0) 0.3 s into the run:
+    the loop keeps answering, nothing is taken for stale."""
+    robot, port = start_robot(*robot_options)
     try:
         done = subprocess.run(
             [
@@ -72,6 +81,7 @@ def test_run_meets_epsilon_against_the_virtual_robot():
         and summary["safety_interventions"] == summary["interventions"]["torque_limit"]
     )
     assert "stopped on request of the controller" in out
+    assert summary["interventions"]["stale_state"] == 0
 
 
 def test_killing_the_loop_makes_the_robot_brake():

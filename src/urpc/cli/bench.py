@@ -3,30 +3,45 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 
 from ..errors import InputError
 from .common import EXIT_OK, Parser, names, positive_int, print_json, show_progress
 
+#: urpc.studies.benchmark.DEFAULT_LOOP_STEPS, not imported so that the CLI starts without
+#: Pinocchio (tests/test_benchmark.py checks that the two agree).
+DEFAULT_LOOP_STEPS = 3000
+
 
 def register(commands) -> None:
     p = commands.add_parser(
         "bench",
-        help="measure the performance suite: rho, control step, simulation, synthesis, campaign",
+        help="measure the performance suite: rho, control step, loop latency, simulation, "
+        "synthesis, campaign",
         description="Measure the figures of docs/performance.md on this machine: one rho "
         "evaluation per bound method and robot and its ratio to one nominal pin.rnea call, one "
-        "control step, the simulation speed of the paper's scenarios 2 and 3, the synthesis "
-        "time, and the throughput of a small campaign on 2 workers. The full suite takes under a "
-        "minute on 2 cores, --quick a few seconds. 'urpc bench bounds' times rho alone.",
+        "control step, the latency of the robot control loop's step (p50 / p99 / p99.9 / max "
+        "next to one RNEA, docs/robot.md), the simulation speed of the paper's scenarios 2 and "
+        "3, the synthesis time, and the throughput of a small campaign on 2 workers. The full "
+        "suite takes under a minute on 2 cores, --quick a few seconds. 'urpc bench bounds' times "
+        "rho alone, 'urpc bench loop' the loop's latency alone.",
         epilog="Timings of single calls are medians of interleaved batches of thread CPU time, "
         "next to one pin.rnea call timed in the same batches: on a shared machine the ratios "
         "are the stable figures.",
     )
     p.add_argument("--quick", action="store_true", help="fewer repeats, shorter simulations")
+    p.add_argument(
+        "--loop-steps",
+        type=positive_int,
+        metavar="N",
+        help=f"control-loop steps timed per robot (default {DEFAULT_LOOP_STEPS}, --quick 1000; "
+        "tens of thousands for tails worth quoting)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
     p.set_defaults(handler=run_bench)
-    parts = p.add_subparsers(dest="bench_part", metavar="[bounds]", parser_class=Parser)
+    parts = p.add_subparsers(dest="bench_part", metavar="[bounds|loop]", parser_class=Parser)
 
     b = parts.add_parser(
         "bounds",
@@ -58,6 +73,32 @@ def register(commands) -> None:
     )
     b.set_defaults(handler=run_bench_bounds)
 
+    lp = parts.add_parser(
+        "loop",
+        help="the robot control loop's step latency (p50 / p99 / p99.9 / max) next to one RNEA",
+        description="Time consecutive ControlLoop.step calls (reference, controller output and "
+        "advance, one log row) on each robot's 1 kHz scenario, in wall-clock time as the loop "
+        "measures itself, next to one nominal pin.rnea of the same arm timed the same way; "
+        "prints p50, p99, p99.9 and max. The tail is the operating system's on a loaded machine.",
+    )
+    lp.add_argument(
+        "--json", action="store_true", default=argparse.SUPPRESS, help="print one JSON object"
+    )
+    lp.add_argument(
+        "--steps",
+        type=positive_int,
+        default=DEFAULT_LOOP_STEPS,
+        metavar="N",
+        help=f"steps timed per robot (default {DEFAULT_LOOP_STEPS})",
+    )
+    lp.add_argument(
+        "--robots",
+        type=names,
+        metavar="NAMES",
+        help="comma-separated robots (default: rr_planar,ur5,panda)",
+    )
+    lp.set_defaults(handler=run_bench_loop)
+
 
 def run_bench(args) -> int:
     from ..studies.benchmark import (
@@ -68,6 +109,8 @@ def run_bench(args) -> int:
     )
 
     settings = SuiteSettings.quick() if args.quick else SuiteSettings()
+    if args.loop_steps is not None:
+        settings = dataclasses.replace(settings, loop_steps=args.loop_steps)
     result = run_benchmarks(settings=settings, progress=_progress(args))
     if args.json:
         print_json(result)
@@ -103,6 +146,32 @@ def run_bench_bounds(args) -> int:
         return EXIT_OK
     print(f"{format_machine(machine)}\n")
     print(format_timings(result))
+    return EXIT_OK
+
+
+def run_bench_loop(args) -> int:
+    from ..studies.benchmark import (
+        BENCHMARK_ROBOTS,
+        format_latency,
+        format_machine,
+        loop_latency,
+        machine_info,
+    )
+
+    robots = args.robots or list(BENCHMARK_ROBOTS)
+    unknown = [name for name in robots if name not in BENCHMARK_ROBOTS]
+    if unknown:
+        raise InputError(
+            f"unknown benchmark robot {', '.join(unknown)}; valid: {', '.join(BENCHMARK_ROBOTS)}",
+            field="robots",
+        )
+    machine = machine_info()
+    table = {name: loop_latency(name, args.steps) for name in robots}
+    if getattr(args, "json", False):
+        print_json({"machine": machine, "loop_step": table})
+        return EXIT_OK
+    print(f"{format_machine(machine)}\n")
+    print(format_latency(table))
     return EXIT_OK
 
 

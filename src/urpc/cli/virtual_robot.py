@@ -28,6 +28,17 @@ def _port(text: str) -> int:
     return port
 
 
+def _sequence_number(text: str) -> int:
+    import argparse
+
+    value = non_negative_int(text)
+    if not value < 2**32:
+        raise argparse.ArgumentTypeError(
+            f"'{text}' is not a 32-bit sequence number; valid: 0-{2**32 - 1}"
+        )
+    return value
+
+
 def _fraction(text: str) -> float:
     import argparse
 
@@ -132,6 +143,14 @@ def register(commands) -> None:
         help="stop if no controller registers within S [s] (60)",
     )
     p.add_argument(
+        "--first-seq",
+        type=_sequence_number,
+        default=0,
+        metavar="N",
+        help="sequence number of the first state (0); e.g. 4294967000 to cross the 32-bit wrap "
+        "(2**32 - 1, then 0) within the first second at 1 kHz",
+    )
+    p.add_argument(
         "--plant",
         choices=("pinocchio", "mujoco"),
         default="pinocchio",
@@ -187,7 +206,9 @@ def run_virtual_robot(args) -> int:
         seed=args.seed,
         watchdog_timeout=args.watchdog_ms * 1e-3,
     )
-    arm = VirtualArm(plant, args.period, options, q0=args.q0, backend=args.plant)
+    arm = VirtualArm(
+        plant, args.period, options, q0=args.q0, backend=args.plant, first_seq=args.first_seq
+    )
 
     def ready(port: int) -> None:
         say(

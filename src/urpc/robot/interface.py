@@ -24,7 +24,9 @@ class RobotState:
     """One sample of the arm.
 
     Attributes:
-        seq: Sample number, +1 per robot period (a gap means samples were lost).
+        seq: Sample number, +1 per robot period (a gap means samples were lost); it may wrap
+            (the UDP packet's is 32 bits), so it is compared in serial-number arithmetic
+            (:func:`urpc.robot.packet.seq_diff`), never with ``<``.
         t: The robot's time of the sample [s].
         q: Joint positions [rad or m].
         qd: Joint velocities [rad/s or m/s].

@@ -7,7 +7,8 @@ sampled simulator (:mod:`urpc.sim.sampled`) calls them, plus one row of the log 
 arrays). It knows nothing about the robot or the clock of the cycle: the safety layer, the
 watchdog and the robot's I/O are :func:`urpc.robot.runner.run`'s. The log becomes a
 :class:`~urpc.sim.results.SimulationResult` (:meth:`ControlLoop.result`), saved to the same files
-as ``urpc simulate --out``.
+as ``urpc simulate --out``. Optionally (``velocity_filter_hz``, default off) the measured velocity
+passes a first-order low-pass before the controller sees it (:meth:`ControlLoop.filter_velocity`).
 """
 
 from __future__ import annotations
@@ -19,12 +20,13 @@ from typing import Any
 import numpy as np
 
 from ..control.base import Controller
+from ..errors import InputError
 from ..trajectories import Trajectory
 
 #: Rows the log holds before it doubles.
 DEFAULT_CAPACITY = 16_384
 _SERIES = ("q", "qd", "q_desired", "qd_desired", "torque", "torque_sent")
-_SCALARS = ("t", "phi", "kappa", "rho_norm", "step_time")
+_SCALARS = ("t", "rho_norm", "step_time")
 
 
 class ControlLoop:
@@ -38,10 +40,18 @@ class ControlLoop:
         epsilon: The precision a run is judged against [rad]; default: the controller's.
         capacity: Rows the log holds before it grows.
         clock: The timer of ``step``'s own duration (``time.perf_counter``).
+        velocity_filter_hz: Cutoff ``f_c`` [Hz] of a first-order low-pass on the measured
+            velocity before the controller sees it, or ``None`` (default): no filter, the
+            controller gets the robot's ``qd`` unchanged. See :meth:`filter_velocity`.
 
     Attributes:
-        last: Diagnostics of the latest step: ``e`` (``||e||`` [rad]), ``phi``, ``kappa``,
-            ``rho_norm`` (``||rho||`` [N m]), ``step_time`` [s].
+        last: Diagnostics of the latest step: ``e`` (``||e||`` [rad]), then the controller's
+            own, exactly the names of its ``diagnostic_units`` (``phi`` and ``kappa`` for the
+            interval law, none for r-alpha), ``rho_norm`` (``||rho||`` [N m]) only for a
+            controller that reports it (``last_rho_norm``: the interval law), and ``step_time``
+            [s].
+        diagnostic_units: Name -> unit of every logged diagnostic: the controller's
+            ``diagnostic_units``, plus ``rho_norm`` (``N m``) when the controller reports it.
         samples: Steps logged since :meth:`reset`.
     """
 
@@ -54,18 +64,49 @@ class ControlLoop:
         epsilon: float | None = None,
         capacity: int = DEFAULT_CAPACITY,
         clock=time.perf_counter,
+        velocity_filter_hz: float | None = None,
     ):
         self.controller = controller
         self.trajectory = trajectory
-        self.period = float(period if period is not None else controller.sample_period)
-        if not self.period > 0:
+        period = period if period is not None else controller.sample_period
+        if period is None or not float(period) > 0:
             raise ValueError("the loop needs a period: give period= or a sampled controller")
-        self.epsilon = float(
-            epsilon if epsilon is not None else getattr(controller, "epsilon", math.nan)
-        )
+        self.period = float(period)
+        if epsilon is None:  # Controller.epsilon is None for a law without one (r-alpha)
+            epsilon = getattr(controller, "epsilon", None)
+        self.epsilon = math.nan if epsilon is None else float(epsilon)
         self.dof = trajectory.dof
         self._clock = clock
-        self._gains = getattr(controller, "gains", None)
+        self.velocity_filter_hz = velocity_filter_hz
+        self._omega = None  # 2 pi f_c [rad/s] of the velocity filter, None: off
+        if velocity_filter_hz is not None:
+            try:
+                cutoff = float(velocity_filter_hz)
+            except (TypeError, ValueError):
+                cutoff = math.nan
+            if not (math.isfinite(cutoff) and cutoff > 0):
+                raise InputError(
+                    f"{velocity_filter_hz!r} must be a finite cutoff > 0 [Hz], or None (no filter)",
+                    field="velocity_filter_hz",
+                )
+            self.velocity_filter_hz = cutoff
+            self._omega = 2.0 * math.pi * cutoff
+        # The controller's own diagnostics, as the simulator logs them (urpc.sim.sampled): the
+        # names of its declaration, in order, evaluated at the sample's state.
+        self._names = tuple(controller.diagnostic_units)
+        self._rho = hasattr(controller, "last_rho_norm")
+        units = dict(controller.diagnostic_units)
+        if self._rho:
+            units.setdefault("rho_norm", "N m")
+        taken = set(_SERIES) | set(_SCALARS) | {"clipped", "e", "qd_filtered"}
+        clash = [name for name in self._names if name in taken]
+        if clash:
+            raise InputError(
+                f"{controller.name} declares the diagnostic {clash[0]!r}, a name the loop's log "
+                f"uses itself; rename it (reserved: {', '.join(sorted(taken))})",
+                field="diagnostic_units",
+            )
+        self.diagnostic_units: dict[str, str] = units
         self._capacity = max(16, int(capacity))
         self.reset()
 
@@ -73,18 +114,50 @@ class ControlLoop:
         """Back to the controller's initial state and an empty log."""
         self.state = self.controller.initial_state()
         self.samples = 0
-        self._log = {name: np.empty((self._capacity, self.dof)) for name in _SERIES}
-        self._log.update({name: np.full(self._capacity, np.nan) for name in _SCALARS})
+        series = _SERIES + (("qd_filtered",) if self._omega is not None else ())
+        self._log = {name: np.empty((self._capacity, self.dof)) for name in series}
+        scalars = ("t", *self._names, *(("rho_norm",) if self._rho else ()), "step_time")
+        self._log.update({name: np.full(self._capacity, np.nan) for name in scalars})
         self._log["clipped"] = np.zeros(self._capacity, dtype=bool)
-        self.last: dict[str, float] = {
-            "e": math.nan, "phi": math.nan, "kappa": math.nan, "rho_norm": math.nan, "step_time": math.nan
-        }  # fmt: skip
+        self.last: dict[str, float] = {name: math.nan for name in ("e", *scalars[1:])}
+        self._logged_of: np.ndarray | None = None
+        self._values = [math.nan] * len(self._names)
+        self._filtered: np.ndarray | None = None  # the velocity filter's output and its time
+        self._filtered_t = math.nan
+
+    def filter_velocity(self, t: float, qd: np.ndarray) -> np.ndarray:
+        """The velocity the controller sees at loop time ``t`` [s]: ``qd`` itself without a
+        filter; with one, per joint the first-order low-pass ``tau dy/dt = qd - y``
+        (``tau = 1 / (2 pi f_c)``) discretized exactly for an input held over each step::
+
+            y_k = y_{k-1} + a (qd_k - y_{k-1}),    a = 1 - exp(-2 pi f_c (t_k - t_{k-1}))
+
+        starting at ``y_0 = qd_0`` (no start-up transient), so a step of the input is followed
+        by ``1 - exp(-2 pi f_c t)`` at the samples. The actual time between samples is used, so
+        a lost sample is a longer step, not a shorter lag. A sample at the same time as the
+        previous one leaves ``y`` unchanged."""
+        if self._omega is None:
+            return qd
+        previous = self._filtered
+        if previous is None:
+            filtered = np.array(qd, dtype=float)
+        else:
+            dt = t - self._filtered_t
+            a = -math.expm1(-self._omega * dt) if dt > 0 else 0.0
+            filtered = previous + a * (qd - previous)
+        self._filtered, self._filtered_t = filtered, t
+        return filtered
 
     def step(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The torque [N m] for the sample ``(q, qd)`` at loop time ``t`` [s]; advances the
-        controller's state by one period and logs the sample."""
+        controller's state by one period and logs the sample. ``qd`` is the measured velocity;
+        with ``velocity_filter_hz`` the controller gets its filtered value
+        (:meth:`filter_velocity`), logged as ``qd_filtered`` next to the measured ``qd``."""
         tic = self._clock()
         controller, state = self.controller, self.state
+        measured = qd
+        if self._omega is not None:
+            qd = self.filter_velocity(t, qd)
         reference = self.trajectory.reference(t)
         tau = controller.output(t, q, qd, reference, state)
         self.state = controller.advance(t, q, qd, reference, state)
@@ -94,25 +167,29 @@ class ControlLoop:
         log = self._log
         log["t"][k] = t
         log["q"][k] = q
-        log["qd"][k] = qd
+        log["qd"][k] = measured
+        if self._omega is not None:
+            log["qd_filtered"][k] = qd
         log["q_desired"][k] = reference.q
         log["qd_desired"][k] = reference.qd
         log["torque"][k] = tau
         log["torque_sent"][k] = tau
-        if self._gains is not None:
-            phi, kappa = self._gains(state)
-        else:
-            named = controller.diagnostics(state)
-            phi, kappa = named.get("phi", math.nan), named.get("kappa", math.nan)
-        rho_norm = getattr(controller, "last_rho_norm", math.nan)
-        log["phi"][k], log["kappa"][k], log["rho_norm"][k] = phi, kappa, rho_norm
+        last = self.last
+        names = self._names
+        if names:
+            if state is not self._logged_of:  # advance() returns the same array while unchanged
+                named = controller.diagnostics(state)
+                self._logged_of = state
+                self._values = [named.get(name, math.nan) for name in names]
+            for name, value in zip(names, self._values, strict=True):
+                log[name][k] = last[name] = value
+        if self._rho:
+            log["rho_norm"][k] = last["rho_norm"] = controller.last_rho_norm
         self.samples = k + 1
         elapsed = self._clock() - tic
         log["step_time"][k] = elapsed
         e = reference.q - q
-        last = self.last
-        last["e"], last["phi"], last["kappa"] = math.sqrt(e @ e), phi, kappa
-        last["rho_norm"], last["step_time"] = rho_norm, elapsed
+        last["e"], last["step_time"] = math.sqrt(e @ e), elapsed
         return tau
 
     def record_sent(self, tau: np.ndarray, clipped: bool) -> None:
@@ -133,7 +210,10 @@ class ControlLoop:
     def series(self) -> dict[str, np.ndarray]:
         """The logged series (copies), one row per step: ``t``, ``q``, ``qd``, ``q_desired``,
         ``qd_desired``, ``torque`` (the controller's), ``torque_sent`` (what the robot got),
-        ``clipped``, ``phi``, ``kappa``, ``rho_norm``, ``step_time``."""
+        ``clipped``, ``step_time``, ``qd_filtered`` (with a velocity filter: what the controller
+        got; ``qd`` is always the measured velocity), and one per name of
+        :attr:`diagnostic_units` (the controller's diagnostics, ``rho_norm`` when it reports
+        it)."""
         return {name: array[: self.samples].copy() for name, array in self._log.items()}
 
     def step_time_percentiles(self) -> dict[str, float]:
@@ -150,7 +230,9 @@ class ControlLoop:
         info: dict[str, Any] | None = None,
     ):
         """The log as a :class:`~urpc.sim.results.SimulationResult` (``torque`` is the
-        controller's, ``saturated`` marks the samples the safety layer changed); its
+        controller's, ``saturated`` marks the samples the safety layer changed; ``diagnostics``
+        are exactly the controller's declared series, their units in
+        ``info["diagnostic_units"]``, as ``urpc simulate`` writes them); its
         :meth:`~urpc.sim.results.SimulationResult.save` writes the files of ``urpc simulate``."""
         from ..sim.results import SimulationResult
 
@@ -166,7 +248,7 @@ class ControlLoop:
             qd_desired=s["qd_desired"],
             torque=s["torque"],
             disturbance=np.zeros_like(s["torque"]),
-            diagnostics={name: s[name] for name in self.controller.diagnostic_units if name in s},
+            diagnostics={name: s[name] for name in self._names},
             saturated=s["clipped"],
             controller=self.controller.name,
             epsilon=self.epsilon,
@@ -177,8 +259,15 @@ class ControlLoop:
             torque_limit=None if torque_limit is None else tuple(float(x) for x in torque_limit),
             step_time_median=float(np.median(s["step_time"])),
             wall_time=wall_time,
-            info={"step_time": self.step_time_percentiles(), **(info or {})},
+            info={**self._units_info(), "step_time": self.step_time_percentiles(), **(info or {})},
         )
+
+    def _units_info(self) -> dict[str, Any]:
+        units = self.controller.diagnostic_units
+        info: dict[str, Any] = {"diagnostic_units": dict(units)} if units else {}
+        if self._omega is not None:
+            info["velocity_filter_hz"] = self.velocity_filter_hz
+        return info
 
 
 def percentiles(times: np.ndarray) -> dict[str, float]:

@@ -29,6 +29,14 @@ Torque, loop -> robot, ``16 + 8 n`` bytes::
     16      8 n   float64   tau, joint torques [N m or N]
 
 A datagram of the wrong size, magic, version or joint count is refused with :class:`PacketError`.
+
+**Sequence numbers wrap.** ``seq`` is 32 bits: at 1 kHz it wraps after about 49.7 days
+(``2**32 - 1`` is followed by ``0``). Every decision on sequence numbers (newer, older, stale,
+lost, which torque answers which sample) is made in serial-number arithmetic (RFC 1982) with
+:func:`seq_diff` and :func:`seq_newer`, never with ``<`` on the raw numbers: ``b`` is newer than
+``a`` when ``(b - a) mod 2**32`` lies in ``(0, 2**31)``. The arithmetic holds as long as the two
+numbers compared are less than ``2**31`` samples apart (24.8 days at 1 kHz); a distance of exactly
+``2**31``, which RFC 1982 leaves undefined, counts as older.
 """
 
 from __future__ import annotations
@@ -46,6 +54,11 @@ STATE_MAGIC, TORQUE_MAGIC = b"URPS", b"URPT"
 STOPPED, LATE = 1, 2
 #: Torque flags.
 HELLO, STOP = 1, 2
+
+#: Sequence numbers are taken modulo this (32 bits on the wire).
+SEQ_MODULUS = 1 << 32
+_SEQ_MASK = SEQ_MODULUS - 1
+_SEQ_HALF = 1 << 31
 
 _STATE_HEADER = struct.Struct("<4sBBHIdI")  # 24 bytes
 _TORQUE_HEADER = struct.Struct("<4sBBHII")  # 16 bytes
@@ -76,6 +89,24 @@ class TorquePacket:
     flags: int = 0
 
 
+def seq_diff(b: int, a: int) -> int:
+    """The serial-number distance from ``a`` to ``b`` (RFC 1982): ``b - a`` reduced modulo
+    ``2**32`` into ``[-2**31, 2**31)``. Positive: ``b`` is newer, by that many samples; ``0``:
+    the same sample; negative: older. Exact across the wrap (``seq_diff(0, 2**32 - 1) == 1``) and
+    for unwrapped counters too, while the true distance is below ``2**31``."""
+    return ((b - a + _SEQ_HALF) & _SEQ_MASK) - _SEQ_HALF
+
+
+def seq_newer(b: int, a: int) -> bool:
+    """Whether sample ``b`` is newer than sample ``a`` in serial-number arithmetic."""
+    return seq_diff(b, a) > 0
+
+
+def seq_wrap(seq: int) -> int:
+    """``seq`` as the wire carries it: modulo ``2**32``."""
+    return seq & _SEQ_MASK
+
+
 def state_size(n: int) -> int:
     return _STATE_HEADER.size + 16 * n
 
@@ -92,7 +123,7 @@ def _joints(n: int) -> int:
 
 def encode_state(seq: int, t: float, q: np.ndarray, qd: np.ndarray, flags: int = 0) -> bytes:
     n = _joints(len(q))
-    header = _STATE_HEADER.pack(STATE_MAGIC, VERSION, n, flags, seq & 0xFFFFFFFF, t, 0)
+    header = _STATE_HEADER.pack(STATE_MAGIC, VERSION, n, flags, seq_wrap(seq), t, 0)
     body = np.concatenate([q, qd]).astype("<f8", copy=False)
     return header + body.tobytes()
 
@@ -111,7 +142,7 @@ def decode_state(data: bytes, n: int) -> StatePacket:
 
 def encode_torque(seq: int, tau: np.ndarray, flags: int = 0) -> bytes:
     n = _joints(len(tau))
-    header = _TORQUE_HEADER.pack(TORQUE_MAGIC, VERSION, n, flags, seq & 0xFFFFFFFF, 0)
+    header = _TORQUE_HEADER.pack(TORQUE_MAGIC, VERSION, n, flags, seq_wrap(seq), 0)
     return header + np.asarray(tau, dtype="<f8").tobytes()
 
 

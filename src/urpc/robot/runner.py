@@ -11,7 +11,10 @@ Per cycle (``docs/robot.md``)::
     robot.send_torque(state.seq, tau)
     watchdog.answered(state.received, clock()) # late past the budget -> safe command, stop
 
-Loop time is ``t = (seq - seq_0) period``: a lost sample leaves a gap in time, not a shift.
+Loop time is ``t = (seq - seq_0) period``: a lost sample leaves a gap in time, not a shift. The
+difference is taken in serial-number arithmetic (:func:`urpc.robot.packet.seq_diff`) and summed
+sample by sample, so loop time keeps counting across the wrap of the 32-bit ``seq`` (about 49.7
+days at 1 kHz) and past it.
 Every loop is bounded: by the number of cycles of the duration, and by the watchdog's silence
 limit while nothing arrives. The clock is a parameter (``time.monotonic`` by default), which lets
 tests drive a whole run on a fake clock.
@@ -28,6 +31,7 @@ import numpy as np
 
 from .interface import RobotInterface, RobotState
 from .loop import ControlLoop
+from .packet import seq_diff
 from .safety import SafetyLayer
 from .watchdog import Watchdog
 
@@ -101,14 +105,14 @@ def run(
                 safety,
                 watchdog,
             )
-        seq0 = state.seq
         last_qd = state.qd
         last_seq = state.seq
+        index = 0  # samples from the first one to last_seq (unwrapped)
         ending, message = "completed", None
         while watchdog.cycles < cycles_wanted:
             if state is None:
                 if watchdog.check_silence(clock()):
-                    safety.watchdog((last_seq - seq0) * period, watchdog.message)
+                    safety.watchdog(index * period, watchdog.message)
                     _send_safe(robot, safety, last_seq + 1, last_qd)
                     ending, message = "watchdog", watchdog.message
                     break
@@ -117,12 +121,13 @@ def run(
             if state.stopped:
                 ending, message = "robot_stopped", "the robot reports that it stopped the arm"
                 break
-            t = (state.seq - seq0) * period
+            gap = seq_diff(state.seq, last_seq)  # 0 at the first sample
+            t = (index + gap) * period
             if not watchdog.arrived(state.seq, state.received):
                 safety.stale(t, f"sample {state.seq} arrived after sample {last_seq}; ignored")
                 state = robot.read_state(read_timeout)
                 continue
-            last_seq = state.seq
+            last_seq, index = state.seq, index + gap
             fault = safety.check_state(t, state.q, state.qd)
             if fault is not None:
                 _send_safe(robot, safety, state.seq, state.qd)

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import InputError
 from .interface import RobotState
-from .packet import HELLO, STOP, PacketError, decode_state, encode_torque, state_size
+from .packet import HELLO, STOP, PacketError, decode_state, encode_torque, seq_newer, state_size
 
 LOOPBACK = "127.0.0.1"
 
@@ -62,6 +62,10 @@ class UdpRobot:
     Attributes:
         received, sent, bad_packets, dropped: Packet counters (``dropped``: states overtaken by a
             newer one before the loop read them).
+
+    :meth:`read_state` returns the newest of the queued states by sequence number in
+    serial-number arithmetic (:func:`~urpc.robot.packet.seq_newer`; across the 32-bit wrap too),
+    not the last to arrive: a datagram reordered behind a newer one is dropped, not answered.
     """
 
     def __init__(self, address: str, dof: int, period: float, clock=time.monotonic):
@@ -116,6 +120,8 @@ class UdpRobot:
             self._registered = True
             if newest is not None:
                 self.dropped += 1
+                if not seq_newer(packet.seq, newest.seq):  # reordered: older than the one held
+                    continue
             newest = RobotState(
                 packet.seq, packet.t, packet.q, packet.qd, self._clock(), packet.stopped
             )

@@ -17,6 +17,12 @@ Which torque applies over the period that starts at sample ``k``: the one answer
 the last torque and counts a late cycle): the ideal zero-order hold of ``urpc simulate``. With
 ``delay = 1`` it applies the torque that arrived during the previous period, as most torque
 interfaces do.
+
+The arm counts its samples in :attr:`VirtualArm.seq` (from 0, unbounded: robot time is
+``seq * period``) and numbers them on the wire :attr:`VirtualArm.wire_seq`, ``first_seq + seq``
+modulo ``2**32`` as the packet carries it (``first_seq`` lets a test start just before the wrap).
+A torque's ``seq`` is mapped back to the sample it answers in serial-number arithmetic
+(:func:`~urpc.robot.packet.seq_diff`), so the wrap changes nothing.
 """
 
 from __future__ import annotations
@@ -41,6 +47,8 @@ from .packet import (
     PacketError,
     decode_torque,
     encode_state,
+    seq_diff,
+    seq_wrap,
     torque_size,
 )
 from .udp import LOOPBACK
@@ -103,9 +111,12 @@ class VirtualArm:
         options: :class:`ArmOptions`.
         q0, qd0: Initial state (default: zeros).
         backend: ``pinocchio`` or ``mujoco``.
+        first_seq: The wire's sequence number of the first sample (any integer; taken modulo
+            ``2**32``).
 
     Attributes:
-        seq: Number of the current sample.
+        seq: Number of the current sample, from 0 (unbounded).
+        wire_seq: Its sequence number on the wire (``first_seq + seq`` modulo ``2**32``).
         braked: The watchdog (or a STOP) braked the arm.
         armed: A torque has arrived once (brakes released, watchdog running).
         late: Periods that started without their torque (the last one was held).
@@ -120,8 +131,10 @@ class VirtualArm:
         q0=None,
         qd0=None,
         backend: str = "pinocchio",
+        first_seq: int = 0,
     ):
         self.robot = plant_robot
+        self.first_seq = seq_wrap(int(first_seq))
         self.period = float(period)
         self.options = options = ArmOptions() if options is None else options
         self.dof = n = plant_robot.dof
@@ -137,7 +150,7 @@ class VirtualArm:
         self.stopped_at: float | None = None
         self.last_torque_time: float | None = None
         self.applied = np.zeros(n)
-        self._torques: dict[int, np.ndarray] = {}  # by the seq they answer (the last few)
+        self._torques: dict[int, np.ndarray] = {}  # by the sample they answer (the last few)
         self._q_measured_previous: np.ndarray | None = None
         self.late_flag = False
         self.torques = 0
@@ -145,6 +158,15 @@ class VirtualArm:
     @property
     def state(self):
         return self.plant.state
+
+    @property
+    def wire_seq(self) -> int:
+        return seq_wrap(self.first_seq + self.seq)
+
+    def sample_of(self, wire_seq: int) -> int:
+        """The sample number (:attr:`seq`'s count) of the wire's ``wire_seq``, taken as the
+        sample nearest to the current one in serial-number arithmetic."""
+        return self.seq + seq_diff(wire_seq, self.wire_seq)
 
     def measure(self) -> tuple[np.ndarray, np.ndarray]:
         """The measured ``(q, qd)`` of the current sample."""
@@ -166,13 +188,13 @@ class VirtualArm:
         return q, qd
 
     def receive(self, now: float, seq: int, tau: np.ndarray) -> None:
-        """A torque answering sample ``seq`` arrived at ``now`` [s]."""
+        """A torque answering the sample numbered ``seq`` on the wire arrived at ``now`` [s]."""
         if self.braked:
             return
         self.armed = True
         self.last_torque_time = now
         self.torques += 1
-        self._torques[seq] = np.array(tau, dtype=float)
+        self._torques[self.sample_of(seq)] = np.array(tau, dtype=float)
         if len(self._torques) > 8:
             del self._torques[min(self._torques)]
 
@@ -264,7 +286,7 @@ class LockstepRobot:
         arm.check_watchdog(self.clock())
         q, qd = arm.measure()
         self._pending_read = True
-        return RobotState(arm.seq, arm.seq * self.period, q, qd, self.clock(), arm.braked)
+        return RobotState(arm.wire_seq, arm.seq * self.period, q, qd, self.clock(), arm.braked)
 
     def send_torque(self, seq: int, tau: np.ndarray) -> None:
         self.clock.now = max(self.clock.now, self._tick + self.response_time(seq))
@@ -391,7 +413,7 @@ def serve(
             if arm.check_watchdog(now):
                 reason = arm.stop_reason
             q, qd = arm.measure()
-            data = encode_state(arm.seq, arm.seq * period, q, qd, arm.flags())
+            data = encode_state(arm.wire_seq, arm.seq * period, q, qd, arm.flags())
             if options.loss and rng.random() < options.loss:
                 counts["lost_states"] += 1
             else:

@@ -8,12 +8,15 @@ with no delay, still gets it within the period). The watchdog **trips** when mor
 (default :data:`SILENCE`: a robot that stops talking is the robot's fault, which its own watchdog
 handles; the loop only has to notice it is gone); the loop then sends the safe command and stops with
 :attr:`Watchdog.message`. Every late cycle and every sample lost on the way (a gap in the
-sequence numbers) is counted.
+sequence numbers) is counted. Sequence numbers are compared in serial-number arithmetic
+(:func:`urpc.robot.packet.seq_diff`), so the wrap of the 32-bit ``seq`` (``2**32 - 1``, then
+``0``) is one step, not a stale sample.
 """
 
 from __future__ import annotations
 
 from ..errors import InputError
+from .packet import seq_diff
 
 #: Default longest time without a state before the watchdog trips [s].
 SILENCE = 0.05
@@ -66,11 +69,13 @@ class Watchdog:
 
     def arrived(self, seq: int, received: float) -> bool:
         """Note a state ``seq`` that arrived at ``received`` [s]; False for a stale one (a seq
-        not newer than the last), which the loop must not answer."""
+        not newer than the last in serial-number arithmetic, so across the 32-bit wrap too),
+        which the loop must not answer."""
         if self._last_seq is not None:
-            if seq <= self._last_seq:
+            gap = seq_diff(seq, self._last_seq)
+            if gap <= 0:
                 return False
-            self.lost_samples += seq - self._last_seq - 1
+            self.lost_samples += gap - 1
         self._last_seq = seq
         self._last_arrival = received
         return True

@@ -13,6 +13,7 @@ the robot; for the UR5 and the Panda a physical box on the child link of every j
 
 Modules: ``robots`` (robots, boxes, methods by name), ``timing`` (interleaved CPU timing),
 ``bound_timing`` (the ``rho`` figures), ``control_step`` (a control step and its profile),
+``loop_latency`` (the robot control loop's step: p50 / p99 / p99.9 / max next to one RNEA),
 ``throughput`` (simulation, synthesis, campaign wall times), ``machine``, ``suite`` (``urpc
 bench``: settings, targets, the run and its table) and ``tightness``.
 """
@@ -26,6 +27,7 @@ from .control_step import (
     format_profile,
     profile_control_step,
 )
+from .loop_latency import DEFAULT_LOOP_STEPS, LATENCY_KEYS, format_latency, loop_latency
 from .machine import format_machine, machine_info
 from .robots import (
     ALL_LINKS_ENTRY,
@@ -58,6 +60,8 @@ __all__ = [
     "BENCHMARK_ROBOTS",
     "CAMPAIGN_SCENARIO",
     "CONTROL_SCENARIOS",
+    "DEFAULT_LOOP_STEPS",
+    "LATENCY_KEYS",
     "PROFILE_COLUMNS",
     "SIM_SCENARIOS",
     "SUITE_KEYS",
@@ -75,9 +79,11 @@ __all__ = [
     "campaign_throughput",
     "control_setup",
     "format_benchmarks",
+    "format_latency",
     "format_machine",
     "format_profile",
     "format_timings",
+    "loop_latency",
     "machine_info",
     "make_method",
     "profile_control_step",

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 from .bound_timing import bench_bounds
 from .control_step import CONTROL_SCENARIOS, control_step_call
+from .loop_latency import DEFAULT_LOOP_STEPS, loop_latency
 from .machine import machine_info
 from .robots import BENCHMARK_ROBOTS
 from .throughput import (
@@ -27,8 +28,8 @@ SYNTHESIS_ASSEMBLIES = ("arm_3dof", "arm_4dof", "arm_4dof_vacuum")
 CAMPAIGN_SCENARIO = "rr_planar/s3_ic1"
 #: Top-level keys of :func:`run_benchmarks`.
 SUITE_KEYS = (
-    "machine", "rnea", "rho", "rho_over_rnea", "control_step", "sim_speed", "synthesis",
-    "campaign_runs_per_minute",
+    "machine", "rnea", "rho", "rho_over_rnea", "control_step", "loop_step", "sim_speed",
+    "synthesis", "campaign_runs_per_minute",
 )  # fmt: skip
 
 
@@ -40,6 +41,8 @@ class SuiteSettings:
         robots: Robots of the ``rho``, RNEA, control-step and synthesis figures.
         methods: Bound methods of the ``rho`` figures.
         repeats: Timed batches of the ``rho``, RNEA and control-step figures (median kept).
+        loop_steps: Steps of the robot control loop timed per robot (the ``loop_step``
+            percentiles; a few thousand keep the run short, ``urpc bench --loop-steps`` more).
         sim_scenarios: Shipped scenarios whose simulation speed is measured.
         sim_duration: Simulated time of each of them; ``None``: the scenario's own (10 s).
         synthesis_repeats: Timed repeats of each synthesis (median kept).
@@ -53,6 +56,7 @@ class SuiteSettings:
     robots: tuple[str, ...] = BENCHMARK_ROBOTS
     methods: tuple[str, ...] = SUITE_METHODS
     repeats: int = 101
+    loop_steps: int = DEFAULT_LOOP_STEPS
     sim_scenarios: tuple[str, ...] = SIM_SCENARIOS
     sim_duration: float | None = None
     synthesis_repeats: int = 7
@@ -64,9 +68,11 @@ class SuiteSettings:
 
     @classmethod
     def quick(cls, **changes) -> SuiteSettings:
-        """Fewer repeats, 2 s simulations, a campaign of 4 runs of 2 s; ``changes`` on top."""
+        """Fewer repeats, 1000 loop steps, 2 s simulations, a campaign of 4 runs of 2 s;
+        ``changes`` on top."""
         quick = dict(
             repeats=21,
+            loop_steps=1000,
             sim_duration=2.0,
             synthesis_repeats=3,
             campaign_runs=4,
@@ -115,6 +121,10 @@ def run_benchmarks(
       :func:`benchmark_box`; one :meth:`IntervalPassivityController.output` of the controller of
       the robot's :data:`CONTROL_SCENARIOS` entry (shipped box, default method). ``rho_over_rnea``
       is ``rho / rnea``, the figure that carries over between machines and loads.
+    * ``loop_step`` per robot: :func:`loop_latency`, the wall-clock latency of
+      :meth:`urpc.robot.loop.ControlLoop.step` over ``loop_steps`` consecutive steps of the same
+      controller (``p50``, ``p99``, ``p99_9``, ``max``), next to one RNEA of the same arm timed
+      the same way (``rnea``), and ``steps``.
     * ``sim_speed``: simulated seconds per wall second of :data:`SIM_SCENARIOS` (wall time of
       the simulation alone, after synthesis).
     * ``synthesis``: wall time (median) of ``load_robot + load_uncertainty + synthesize`` per
@@ -148,6 +158,11 @@ def run_benchmarks(
     )
     control_step = {name: bounds["extra"][name]["control_step"] for name in settings.robots}
 
+    loop_step = {}
+    for name in settings.robots:
+        say(f"loop step latency: {name}, {settings.loop_steps} steps")
+        loop_step[name] = loop_latency(name, settings.loop_steps)
+
     sim_speed = {}
     for name in settings.sim_scenarios:
         say(f"simulation speed: {name}")
@@ -178,6 +193,7 @@ def run_benchmarks(
         "rho": bounds["rho"],
         "rho_over_rnea": bounds["rho_over_rnea"],
         "control_step": control_step,
+        "loop_step": loop_step,
         "sim_speed": sim_speed,
         "synthesis": synthesis,
         "campaign_runs_per_minute": runs_per_minute,
@@ -208,6 +224,11 @@ def format_benchmarks(result: dict, settings: SuiteSettings | None = None) -> st
         case = f"{robot} ({CONTROL_SCENARIOS.get(robot, '?')})"
         ratio = f"{seconds / rnea[robot]:.1f}" if robot in rnea else "-"
         add("control step", case, f"{1e6 * seconds:.1f} us", ratio, ("control", robot), seconds)
+    for robot, f in result.get("loop_step", {}).items():
+        case = f"{robot}, {f['steps']} steps (p50 / p99 / p99.9 / max)"
+        text = " / ".join(f"{1e6 * f[key]:.1f}" for key in ("p50", "p99", "p99_9", "max")) + " us"
+        ratio = f"{f['p50'] / f['rnea']:.0f}"  # against the RNEA timed in the same way
+        add("loop step", case, text, ratio, ("loop_step", robot), f["p50"])
     for scenario, speed in result["sim_speed"].items():
         duration = None if settings is None else settings.sim_duration
         case = scenario if duration is None else f"{scenario} ({duration:g} s run)"
