@@ -307,3 +307,15 @@ def test_a_one_joint_robot_is_certified_and_runs(tmp_path):
         disturbance="worst",
     )  # fmt: skip
     assert result.metrics["met"]
+
+
+def test_a_delayed_law_is_not_certified_by_the_undelayed_argument(rr, rr_box):
+    """The one-sample-delay law predicts with the nominal model; the argument does not bound
+    that prediction's error, so the certificate must not call it certified."""
+    plain = urpc.synthesize(rr, rr_box, 1e-2, sample_period=5e-4)
+    delayed = urpc.synthesize(rr, rr_box, 1e-2, sample_period=5e-4, delay=1)
+    options = dict(duration=4.0, disturbance_bound=10.0)
+    assert certify(plain, PaperTrajectory(), **options).certified
+    certificate = certify(delayed, PaperTrajectory(), **options)
+    assert not certificate.certified
+    assert certificate.failed[0].name == "actuation delay counted by the argument"
