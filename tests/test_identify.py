@@ -250,3 +250,20 @@ def test_urpc_identify_is_callable_both_ways(rr):
                      np.random.default_rng(1))  # fmt: skip
     assert urpc.identify(rr, prior, samples, 1.0).samples == 40
     assert subpackage(rr, prior, samples, 1.0).samples == 40
+
+
+def test_a_fourier_excitation_has_a_sound_jerk_bound_and_can_be_certified(rr):
+    """The jerk bound holds central differences of qdd at random times; with it the
+    certificate covers an excitation run (it refused the class before)."""
+    rng = np.random.default_rng(4)
+    trajectory = FourierTrajectory(np.array([0.3, -0.2]), rng.normal(0, 0.1, (2, 3)),
+                                   rng.normal(0, 0.1, (2, 3)), 0.4)  # fmt: skip
+    bound = trajectory.jerk_bound(np.zeros(1), np.ones(1))[0]
+    h = 1e-4
+    for t in rng.uniform(0, 10, 200):
+        jerk = (trajectory.evaluate(t + h)[2] - trajectory.evaluate(t - h)[2]) / (2 * h)
+        assert np.all(np.abs(jerk) <= bound * (1 + 1e-6))
+    box = urpc.load_uncertainty("rr_planar", rr)
+    controller = urpc.synthesize(rr, box, 1e-2, sample_period=5e-4)
+    certificate = urpc.certify(controller, trajectory, duration=2.0, disturbance_bound=1.0)
+    assert certificate.max_sample_period > 0, certificate.summary()

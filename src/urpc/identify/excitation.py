@@ -73,6 +73,15 @@ class FourierTrajectory(Trajectory):
         """``(n,)`` bound of ``|q^(order)|`` over all time (``order >= 1``; 0: ``|q - q0|``)."""
         return np.sum(self.omega**order * np.hypot(self.a, self.b), axis=1)
 
+    def jerk_bound(self, start, stop):
+        """``sum_l (l w)^3 hypot(a_l, b_l)`` per joint, for all time (so the certificate can
+        cover an excitation run); rounded up."""
+        peak = self.derivative_bound(3) * (1 + 1e-12)
+        return np.broadcast_to(peak, np.shape(start) + (self.dof,))
+
+    def fingerprint(self) -> dict:
+        return {"home": self.home, "a": self.a, "b": self.b, "frequency": self.frequency}
+
     def __repr__(self) -> str:
         return f"FourierTrajectory(dof={self.dof}, harmonics={self.a.shape[1]}, f={self.frequency})"
 
