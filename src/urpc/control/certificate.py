@@ -345,6 +345,8 @@ class _SampledSearch:
         floor_of = self.floor_of
         shares = parts.get("shares") or {}
         out: dict[str, Any] = {}
+        if "invalid_cell" in parts:
+            out["invalid_time"] = floor_of.cell_time(parts["invalid_cell"])[0]
         if shares:
             dominant = max(shares, key=shares.get)
             total = sum(shares.values()) or 1.0
@@ -417,6 +419,13 @@ def _advice(
         changes.append(f"raise epsilon to {floor:.3g} rad (the floor at T = {T * 1e3:.3g} ms)")
     text = "to certify: " + ", or ".join(changes)
     term = figures.get("dominant_term")
+    if "invalid_cell" in figures:
+        start = figures.get("invalid_time", math.nan)
+        return (
+            text + f"; the inertia bounds fail on the cell that starts at t = {start:.3g} s "
+            "(M_L not positive definite or beta <= 0 over that cell's box of q and the "
+            "parameters): narrow the box's mass and inertia intervals, or use more cells"
+        )
     if term is None:
         margin = figures.get("margin", math.nan)
         return (
@@ -490,6 +499,7 @@ def _sampled_conditions(
             "ultimate bound below epsilon", floor <= epsilon, floor, epsilon,
             (f"raise epsilon to {floor:.3g} rad or shorten" if math.isfinite(floor)
              else "no epsilon is guaranteed at this period: shorten")
-            + f" the period to {max_period:.3g} s",
+            + (f" the period to {max_period:.3g} s" if max_period > 0
+               else " the period: none up to twice this one is certified"),
         ),
     ]  # fmt: skip
