@@ -77,7 +77,7 @@ def _init_boxes():
                 robot = urpc.load_robot(robot_name)
                 text = box_template(robot, BoxTemplateSettings(), robot_source=robot_name)
                 data = yaml.safe_load(text)
-                data["disturbance"] = INIT_DISTURBANCE
+                data["disturbance"] = "unknown"  # Theorem 2's adaptive law, as the others
                 box = urpc.parse_uncertainty(data, robot)
                 controller = urpc.synthesize(robot, box, 1e-2, sample_period=period)
                 trajectory = urpc.generic_trajectory(box.nominal_robot(robot))
@@ -127,7 +127,9 @@ def measure(kind: str, make, plants: int) -> dict:
     points = [box.vertex(0), box.vertex(2**box.n_uncertain - 1)]
     points += [box.sample(rng) for _ in range(max(0, plants - 2))]
     seconds = min(RUN_SECONDS, duration)
-    saturated = np.array([(controller.phi_max - controller.phi_P) / controller.phi_I])
+    saturated = None  # Theorem 1's law has no state; Theorem 2's starts at the ceiling
+    if controller.n_states:
+        saturated = np.array([(controller.phi_max - controller.phi_P) / controller.phi_I])
     worst = 0.0
     for point in points[:plants]:
         result = urpc.simulate(
