@@ -10,7 +10,8 @@ quantity is taken at a point of the reference: nothing can slip between grid poi
 reference, the period or the duration.
 
 The bounds over one cell (inertia models, the norms of the mismatch, the Coriolis matrix of
-every plant) are in :mod:`urpc.control.cell_bounds`.
+every plant) are in :mod:`urpc.control.cell_bounds`; the one-period floor over the cells'
+enclosures is :mod:`urpc.control.period_bound`.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from .cell_bounds import (
     plant_hull,
     velocity_bound,
 )
-from .interval import PHI_MAX_FACTOR, IntervalPassivityController
+from .interval import IntervalPassivityController
 from .sampled_joints import JointTerms
 
 #: At most this many pieces of the box (the cost grows linearly with it).
@@ -396,140 +397,6 @@ class CellFloor:
             return 0.0
         return joints.nominal[0] * qdd_a.dot.magnitude + joints.nominal[1] * qd_a.dot.magnitude
 
-    # ------------------------------------------------------------------------- the bound
-    def gain(self, T: float) -> float:
-        """The gain ``D`` [N m s/rad] the argument counts on: the law's own ceiling (Theorem 2,
-        shared with the law, so it needs no bound of its own) or ``phi_P`` (Theorem 1)."""
-        c = self.controller
-        if not c.adaptive:
-            return c.phi_P
-        return max(c.phi_P, PHI_MAX_FACTOR * self.law_bounds.max_upper_eigenvalue / T)
-
-    def floor_at(
-        self, T: float, d: float, quantities: dict, tube: float | None = None
-    ) -> tuple[float, dict]:
-        """The ultimate bound of ``||e||`` for period ``T`` [s] and disturbance ``d`` [N m] in the
-        tube ``||e|| <= tube`` (at most the tube the quantities were enclosed over); the worst
-        piece, with its parts."""
-        tube = quantities["tube"] if tube is None else tube
-        if tube > quantities["tube"] * (1 + 1e-12):
-            raise ValueError("the tube exceeds the one the quantities were enclosed over")
-        d = d + self.joints.coulomb
-        D = self.gain(T)
-        worst, parts = -math.inf, {}
-        for piece_index, p in enumerate(quantities["pieces"]):
-            floor, piece_parts = self._piece_floor(T, d, D, quantities, p, tube)
-            piece_parts["piece"] = piece_index
-            if floor > worst or not parts:
-                worst, parts = floor, piece_parts
-            if not math.isfinite(floor):
-                break
-        return worst, parts
-
-    def _cell_terms(self, T, d, D, q: dict, p: dict, tube: float) -> dict[str, np.ndarray]:
-        """The per-cell terms of the floor for one piece (the floor takes their extremes)."""
-        n = self.dof
-        R, RM, V, Rs = (p[name][0] + tube * p[name][1] for name in ("R", "RM", "V", "Rs"))
-        # ||ed|| <= ||r|| + Kr ||e|| moves w along the tube's Jacobian.
-        error_rate = q["r_max"] + float(self.Kr.max()) * tube
-        # The rate of M_L^-1 w, in the Euclidean norm and straight in the plant's metric.
-        rate_inverse = p["rate_inverse"] + error_rate * p["R"][1] + p["inverse_change"] * Rs
-        rate_inverse_M = p["rate_inverse_M"] + error_rate * p["RM"][1] + p["inverse_change_M"] * Rs
-        rate = p["rate"] + error_rate * p["V"][1]
-        lag = p["lag"] + error_rate * p["lag_e"]
-        lag_M = p["lag_M"] + error_rate * p["lag_M_e"]
-        beta, lam_L, lam_U = p["beta"], p["lam_L"], p["lam_U"]
-        a = beta * D * T / (D * T + beta * lam_U)
-        growth = 0.5 * T * p["metric_rate"]  # the metric M(q) changes within the period
-        b = T * (p["K"] * (0.5 + p["nu"]) + p["coriolis"] + self.joints.damping / lam_L) + growth
-        sqrt_L, sqrt_U = np.sqrt(lam_L), np.sqrt(lam_U)
-        equilibrium = T * (R + 0.5 * T * lag) + V / D
-        response = T * d * (q["trace_inverse"] + n / (D * T))
-        rate_M = np.minimum(rate_inverse_M, sqrt_U * rate_inverse)
-        forcing = T * (T * rate_M + sqrt_U * rate / D) * (1 + growth)
-        equilibrium_M = T * (RM + 0.5 * T * lag_M) + sqrt_U * V / D
-        response_M = T * d / (np.maximum(a, 1e-300) * sqrt_L)
-        return {
-            "valid": p["valid"],
-            "contraction": a,
-            "margin": a - b,
-            "lam_L": lam_L,
-            "equilibrium": equilibrium,
-            "response": response,
-            "slow": equilibrium + response,
-            "forcing": forcing,
-            "pushed": forcing + b * (equilibrium_M + response_M) * (1 + growth),
-            "mismatch": T * R + V / D,
-            "torque_lag": 0.5 * T * T * lag,
-        }
-
-    def _piece_floor(self, T, d, D, q: dict, p: dict, tube: float) -> tuple[float, dict]:
-        if not np.all(p["valid"]):
-            cell = int(np.flatnonzero(~p["valid"])[0])
-            return math.inf, {"margin": -math.inf, "invalid_cell": cell, "gain_D": D}
-        terms = self._cell_terms(T, d, D, q, p, tube)
-        margin_cells = terms["margin"]
-        worst_cell = int(np.argmin(margin_cells))
-        margin = float(margin_cells[worst_cell])
-        parts = {
-            "contraction": float(np.min(terms["contraction"])),
-            "margin": margin,
-            "gain_D": float(D),
-            "margin_cell": worst_cell,
-        }
-        if not margin > 0:
-            return math.inf, parts
-        sqrt_L_min = float(np.sqrt(terms["lam_L"].min()))
-        forcing_max = float(np.max(terms["forcing"]))
-        deviation = float(np.max(terms["pushed"])) / margin
-        slow = terms["slow"]
-        r_sup = float(np.max(slow)) + (deviation + forcing_max) / sqrt_L_min
-        floor = r_sup / float(self.Kr.min())
-        # Which term dominates, and where (for the report).
-        shares = {
-            "mismatch": float(np.max(terms["mismatch"])),
-            "torque_lag": float(np.max(terms["torque_lag"])),
-            "disturbance": float(np.max(terms["response"])),
-            "deviation": (deviation + forcing_max) / sqrt_L_min,
-        }
-        parts.update(
-            r_sup=r_sup,
-            r_equilibrium=float(np.max(terms["equilibrium"])),
-            shares=shares,
-            slow_cell=int(np.argmax(slow)),
-            lambda_L_min=float(terms["lam_L"].min()),
-        )
-        return floor, parts
-
-    def torque_bound(
-        self, T: float, d: float, quantities: dict, tube: float, r_sup: float
-    ) -> np.ndarray:
-        """Per joint, a bound [N m] of the torque the law commands once ``||e||`` is within the
-        floor's regime (docs/sampled-data.md §3, "Torques"): with ``r = r* + r_d + delta``,
-        ``tau0 + K r* = tau0 + w`` is the plant's own torque, ``K r_d = sum_j M^1/2 A (1-A)^j
-        M^-1/2 d_j`` is at most ``sqrt(M_ii) S(a) d / sqrt(lambda_L)`` with
-        ``S(a) = sum_j max_{a <= x <= 1} x (1-x)^j``, and ``K delta = M^1/2 (A / T) M^1/2 delta``
-        at most ``sqrt(M_ii) ||delta||_M / T``; the law's nominal torque at ``r != 0`` adds
-        ``torque_per_r ||r||`` with ``||r|| <= r_sup``; the largest over the cells and pieces."""
-        d = d + self.joints.coulomb
-        D = self.gain(T)
-        bound = np.zeros(self.dof)
-        for p in quantities["pieces"]:
-            terms = self._cell_terms(T, d, D, quantities, p, tube)
-            margin = float(np.min(terms["margin"]))
-            if not np.all(p["valid"]) or not margin > 0:
-                return np.full(self.dof, math.inf)
-            delta_M = float(np.max(terms["pushed"])) / margin + float(np.max(terms["forcing"]))
-            root = np.sqrt(p["upper_diagonal"])
-            response = _response_sum(terms["contraction"]) * d / np.sqrt(p["lam_L"])
-            piece = (
-                quantities["plant_torque"]
-                + quantities["torque_per_r"] * r_sup
-                + root * (response[:, None] + delta_M / T)
-            )
-            bound = np.maximum(bound, piece.max(axis=0))
-        return bound * (1 + 1e-12)
-
     def dominant_link(self, quantities: dict, piece: int, cell: int, tube: float):
         """The uncertain link with the largest part of ``||M_L^-1 w||`` at a cell of a piece,
         and that part's share, or ``None`` without uncertain links."""
@@ -554,20 +421,6 @@ class CellFloor:
     def cell_time(self, cell: int) -> tuple[float, float]:
         """The time span [s] of a cell (before its widening)."""
         return float(self.edges[cell]), float(self.edges[cell + 1])
-
-
-def _response_sum(a: np.ndarray, terms: int = 4096) -> np.ndarray:
-    """``S(a) = sum_j max_{a <= x <= 1} x (1 - x)^j`` per entry of ``a`` (in (0, 1]): the sum
-    of ``||A (1 - A)^j||`` over the loop's memory for ``a I <= A <= I``. Each term is at its
-    maximum ``x = max(a, 1 / (j + 1))``; past ``terms`` the tail ``(1 - a)^terms`` is added
-    whole (it bounds ``sum_{j >= terms} a (1 - a)^j``, and ``1 / (j + 1) < a`` there once
-    ``terms >= 1 / a``; for smaller ``a`` the remaining harmonic terms are bounded by
-    ``sum_{j >= terms} 1 / (j + 1)``, infinite, so ``a`` below ``1 / terms`` gives ``inf``)."""
-    a = np.asarray(a, dtype=float)
-    j = np.arange(terms)[:, None]
-    x = np.maximum(a[None], 1.0 / (j + 1))
-    total = np.sum(x * (1 - x) ** j, axis=0) + (1 - a) ** terms
-    return np.where(a * terms >= 1.0, total * (1 + 1e-12), math.inf)
 
 
 def split_box(box: ParameterBox, pieces: int = PIECES) -> list[ParameterBox]:

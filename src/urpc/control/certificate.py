@@ -35,6 +35,7 @@ from ..jsonsafe import jsonable, non_finite_paths, restore_non_finite
 from ..trajectories import Trajectory
 from .cells import CellFloor
 from .interval import IntervalPassivityController
+from .period_bound import PeriodBound
 
 #: Version of the argument and of the :class:`Certificate` it returns. Bump it whenever a change
 #: of this module, of :mod:`urpc.control.cells` or of :mod:`urpc.control.cell_bounds` changes a
@@ -213,7 +214,7 @@ def certify(
         figures.update(parts)
         figures.update(search.report(floor, parts, quantities))
         if math.isfinite(floor):
-            figures.update(_torque_figures(floor_of, controller, d, quantities, parts))
+            figures.update(_torque_figures(search.bound, controller, d, quantities, parts))
         conditions += _sampled_conditions(figures, floor, controller.epsilon, max_period)
     holds = all(c.holds for c in conditions) and floor <= controller.epsilon
     if not holds and law == "implicit":
@@ -248,6 +249,7 @@ class _SampledSearch:
         progress: Callable[[str], Any] | None = None,
     ):
         self.floor_of, self.controller, self.d = floor_of, controller, d
+        self.bound = PeriodBound(floor_of)
         self.say = progress or (lambda message: None)
         self.T = controller.sample_period
         self.extension = 2.0 * self.T
@@ -274,7 +276,7 @@ class _SampledSearch:
         top = quantities["tube"]
         rho, floor, parts = 0.0, math.inf, {}
         for _ in range(60):
-            floor, parts = self.floor_of.floor_at(T, self.d, quantities, rho)
+            floor, parts = self.bound.floor_at(T, self.d, quantities, rho)
             if not math.isfinite(floor) or floor > top:
                 return math.inf, parts, rho
             if floor <= rho:
@@ -289,7 +291,7 @@ class _SampledSearch:
         rho = quantities["tube"]
         self.say(f"scanning the basin (||e|| <= {rho:.3g})")
         while rho > max(least, 1e-6 * quantities["tube"]):
-            floor, parts = self.floor_of.floor_at(self.T, self.d, quantities, rho)
+            floor, parts = self.bound.floor_at(self.T, self.d, quantities, rho)
             if floor <= rho and parts.get("r_sup", math.inf) <= quantities["r_max"]:
                 return rho
             rho *= 0.9
@@ -313,7 +315,7 @@ class _SampledSearch:
                 break
             tube *= 10.0
         quantities = self.enclose(self.epsilon)
-        _, parts = self.floor_of.floor_at(self.T, self.d, quantities)
+        _, parts = self.bound.floor_at(self.T, self.d, quantities)
         parts.update(tube=self.epsilon, r_max=quantities["r_max"])
         return math.inf, parts, quantities
 
@@ -368,13 +370,15 @@ class _SampledSearch:
         return out
 
 
-def _torque_figures(floor_of, controller, d: float, quantities: dict, parts: dict) -> dict:
+def _torque_figures(
+    period_bound: PeriodBound, controller, d: float, quantities: dict, parts: dict
+) -> dict:
     """The bound of the commanded torque per joint once in the floor's regime, against the
     URDF's effort limits (a non-positive or infinite limit counts as none). Not a condition of
     ``certified``: a torque the argument cannot keep below the limit is reported, with the
     joint, in ``torque_note`` and the summary."""
     T = controller.sample_period
-    bound = floor_of.torque_bound(T, d, quantities, parts["tube"], parts["r_sup"])
+    bound = period_bound.torque_bound(T, d, quantities, parts["tube"], parts["r_sup"])
     effort = np.asarray(controller.robot.model.effortLimit, dtype=float)
     limited = np.isfinite(effort) & (effort > 0)
     out: dict[str, Any] = {"torque_bound": bound.tolist(), "torques_within_limits": True}
