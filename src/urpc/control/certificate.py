@@ -34,11 +34,13 @@ from ..errors import InputError
 from ..jsonsafe import jsonable, non_finite_paths, restore_non_finite
 from ..trajectories import Trajectory
 from .cells import CellFloor
+from .certificate_report import advice, lightest_joint, torque_figures
 from .interval import IntervalPassivityController
 from .period_bound import PeriodBound
 
 #: Version of the argument and of the :class:`Certificate` it returns. Bump it whenever a change
-#: of this module, of :mod:`urpc.control.cells` or of :mod:`urpc.control.cell_bounds` changes a
+#: of this module, of :mod:`urpc.control.cells`, :mod:`urpc.control.cell_bounds`,
+#: :mod:`urpc.control.period_bound` or :mod:`urpc.control.certificate_report` changes a
 #: certificate (a bound, a condition, a figure, a default): the certificate cache
 #: (:mod:`urpc.control.certificate_cache`) keys every record on it, so that no certificate of an
 #: older argument is ever reused. (The key also holds urpc's version and a digest of its source.)
@@ -214,11 +216,11 @@ def certify(
         figures.update(parts)
         figures.update(search.report(floor, parts, quantities))
         if math.isfinite(floor):
-            figures.update(_torque_figures(search.bound, controller, d, quantities, parts))
+            figures.update(torque_figures(search.bound, controller, d, quantities, parts))
         conditions += _sampled_conditions(figures, floor, controller.epsilon, max_period)
     holds = all(c.holds for c in conditions) and floor <= controller.epsilon
     if not holds and law == "implicit":
-        figures["advice"] = _advice(figures, floor, controller, max_period)
+        figures["advice"] = advice(figures, floor, controller, max_period)
     if controller.sample_period is None and not controller.adaptive:
         conditions.append(
             Condition(
@@ -356,7 +358,7 @@ class _SampledSearch:
             out["term_shares"] = {k: v / total for k, v in shares.items()}
             cell = parts.get("slow_cell", 0)
             out["worst_time"] = floor_of.cell_time(cell)[0]
-            lightest = _lightest_joint(floor_of, quantities, cell)
+            lightest = lightest_joint(floor_of, quantities, cell)
             out["lightest_joint"] = floor_of.robot.joint_names[lightest]
             link = floor_of.dominant_link(
                 quantities, parts.get("piece", 0), cell, parts.get("tube", self.epsilon)
@@ -368,95 +370,6 @@ class _SampledSearch:
             #: Before the gains saturate, ||e_k|| >= epsilon for at most s_max / epsilon seconds.
             out["time_above_epsilon_before_saturation"] = s_max / self.epsilon
         return out
-
-
-def _torque_figures(
-    period_bound: PeriodBound, controller, d: float, quantities: dict, parts: dict
-) -> dict:
-    """The bound of the commanded torque per joint once in the floor's regime, against the
-    URDF's effort limits (a non-positive or infinite limit counts as none). Not a condition of
-    ``certified``: a torque the argument cannot keep below the limit is reported, with the
-    joint, in ``torque_note`` and the summary."""
-    T = controller.sample_period
-    bound = period_bound.torque_bound(T, d, quantities, parts["tube"], parts["r_sup"])
-    effort = np.asarray(controller.robot.model.effortLimit, dtype=float)
-    limited = np.isfinite(effort) & (effort > 0)
-    out: dict[str, Any] = {"torque_bound": bound.tolist(), "torques_within_limits": True}
-    if not np.any(limited):
-        out["torques_within_limits"] = None
-        return out
-    ratio = np.where(limited, bound / np.where(limited, effort, 1.0), 0.0)
-    worst = int(np.argmax(ratio))
-    if ratio[worst] > 1.0:
-        joint = controller.robot.joint_names[worst]
-        out["torques_within_limits"] = False
-        out["torque_note"] = (
-            f"torques within the effort limits not proven: joint '{joint}' bound "
-            f"{bound[worst]:.4g} N m > effort {effort[worst]:.4g} N m (the argument assumes an "
-            "unclipped torque)"
-        )
-    return out
-
-
-#: What each term of the floor is, for the advice.
-TERMS = {
-    "mismatch": "the model mismatch w over the box (the held loop's quasi-static error)",
-    "torque_lag": "the nominal torque's change within a period",
-    "disturbance": "the disturbance's response, through the lightest inertia mode",
-    "deviation": "the motion of the quasi-static error and the perturbations of the period "
-    "(Coriolis, the metric's change, T Kr) acting on it",
-}
-
-
-def _advice(
-    figures: dict, floor: float, controller: IntervalPassivityController, max_period: float
-) -> str:
-    """One paragraph: the changes that certify (computed: the period; the epsilon of the floor
-    in a wider tube) and what the floor is made of (term, joint, link)."""
-    T = controller.sample_period
-    changes = []
-    if max_period > 0:
-        changes.append(f"shorten the period to {max_period * 1e3:.3g} ms (certified there)")
-    else:
-        changes.append("no period up to 2 T is certified")
-    if math.isfinite(floor) and floor > controller.epsilon:
-        changes.append(f"raise epsilon to {floor:.3g} rad (the floor at T = {T * 1e3:.3g} ms)")
-    text = "to certify: " + ", or ".join(changes)
-    term = figures.get("dominant_term")
-    if "invalid_cell" in figures:
-        start = figures.get("invalid_time", math.nan)
-        return (
-            text + f"; the inertia bounds fail on the cell that starts at t = {start:.3g} s "
-            "(M_L not positive definite or beta <= 0 over that cell's box of q and the "
-            "parameters): narrow the box's mass and inertia intervals, or use more cells"
-        )
-    if term is None:
-        margin = figures.get("margin", math.nan)
-        return (
-            text + f"; the period's perturbation b exceeds its contraction a (a - b = {margin:.3g}"
-            "): b grows with T Kr and T |qd|, so a shorter period or a lower Kr helps"
-        )
-    share = figures["term_shares"][term]
-    text += (
-        f"; the floor is {share:.0%} '{term}' ({TERMS[term]}), at t = "
-        f"{figures['worst_time']:.3g} s, through joint '{figures['lightest_joint']}'"
-        " (the lightest mode)"
-    )
-    link = figures.get("dominant_link")
-    if link is not None:
-        text += (
-            f"; link '{link}' is {figures['dominant_link_share']:.0%} of the mismatch: "
-            "narrowing its box lowers the mismatch and deviation terms"
-        )
-    if term == "disturbance":
-        text += "; a smaller disturbance bound or a larger Kr lowers it in proportion"
-    return text
-
-
-def _lightest_joint(floor_of: CellFloor, quantities: dict, cell: int) -> int:
-    """The joint whose diagonal of ``M_L^-1`` is largest at a cell (the lightest mode's joint)."""
-    inverse = quantities["law_inverse_diagonal"][cell]
-    return int(np.argmax(inverse))
 
 
 def _theorem1_floor(figures: dict, controller: IntervalPassivityController) -> float:

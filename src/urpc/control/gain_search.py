@@ -16,6 +16,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from ..errors import InputError
+from ..jsonsafe import jsonable
 from ..names import KR_CANDIDATES  # the default of synthesis, 3 / sqrt(epsilon), is 30 at 1e-2
 from ..trajectories import Trajectory
 from .certificate import Certificate, certify
@@ -30,15 +31,17 @@ class GainTrial:
     certificate: Certificate
 
     def to_dict(self) -> dict:
+        """JSON-ready (an infinite floor becomes ``None``)."""
         c = self.certificate
-        floor = c.epsilon_floor if math.isfinite(c.epsilon_floor) else None
-        return {
-            "Kr": self.Kr,
-            "certified": c.certified,
-            "epsilon_floor": floor,
-            "max_sample_period": c.max_sample_period,
-            "dominant_term": c.figures.get("dominant_term"),
-        }
+        return jsonable(
+            {
+                "Kr": self.Kr,
+                "certified": c.certified,
+                "epsilon_floor": c.epsilon_floor,
+                "max_sample_period": c.max_sample_period,
+                "dominant_term": c.figures.get("dominant_term"),
+            }
+        )
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,105 @@
+"""What a certificate tells its user beyond the verdict: the torque the law commands against the
+effort limits, and, when a configuration is not certified, what to change (the period, the
+epsilon, the term, joint and link that dominate the floor), in text for ``urpc certify`` and in
+the certificate's ``figures`` for ``--json``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from .cells import CellFloor
+from .interval import IntervalPassivityController
+from .period_bound import PeriodBound
+
+
+def torque_figures(
+    period_bound: PeriodBound, controller, d: float, quantities: dict, parts: dict
+) -> dict:
+    """The bound of the commanded torque per joint once in the floor's regime, against the
+    URDF's effort limits (a non-positive or infinite limit counts as none). Not a condition of
+    ``certified``: a torque the argument cannot keep below the limit is reported, with the
+    joint, in ``torque_note`` and the summary."""
+    T = controller.sample_period
+    bound = period_bound.torque_bound(T, d, quantities, parts["tube"], parts["r_sup"])
+    effort = np.asarray(controller.robot.model.effortLimit, dtype=float)
+    limited = np.isfinite(effort) & (effort > 0)
+    out: dict[str, Any] = {"torque_bound": bound.tolist(), "torques_within_limits": True}
+    if not np.any(limited):
+        out["torques_within_limits"] = None
+        return out
+    ratio = np.where(limited, bound / np.where(limited, effort, 1.0), 0.0)
+    worst = int(np.argmax(ratio))
+    if ratio[worst] > 1.0:
+        joint = controller.robot.joint_names[worst]
+        out["torques_within_limits"] = False
+        out["torque_note"] = (
+            f"torques within the effort limits not proven: joint '{joint}' bound "
+            f"{bound[worst]:.4g} N m > effort {effort[worst]:.4g} N m (the argument assumes an "
+            "unclipped torque)"
+        )
+    return out
+
+
+#: What each term of the floor is, for the advice.
+TERMS = {
+    "mismatch": "the model mismatch w over the box (the held loop's quasi-static error)",
+    "torque_lag": "the nominal torque's change within a period",
+    "disturbance": "the disturbance's response, through the lightest inertia mode",
+    "deviation": "the motion of the quasi-static error and the perturbations of the period "
+    "(Coriolis, the metric's change, T Kr) acting on it",
+}
+
+
+def advice(
+    figures: dict, floor: float, controller: IntervalPassivityController, max_period: float
+) -> str:
+    """One paragraph: the changes that certify (computed: the period; the epsilon of the floor
+    in a wider tube) and what the floor is made of (term, joint, link)."""
+    T = controller.sample_period
+    changes = []
+    if max_period > 0:
+        changes.append(f"shorten the period to {max_period * 1e3:.3g} ms (certified there)")
+    else:
+        changes.append("no period up to 2 T is certified")
+    if math.isfinite(floor) and floor > controller.epsilon:
+        changes.append(f"raise epsilon to {floor:.3g} rad (the floor at T = {T * 1e3:.3g} ms)")
+    text = "to certify: " + ", or ".join(changes)
+    term = figures.get("dominant_term")
+    if "invalid_cell" in figures:
+        start = figures.get("invalid_time", math.nan)
+        return (
+            text + f"; the inertia bounds fail on the cell that starts at t = {start:.3g} s "
+            "(M_L not positive definite or beta <= 0 over that cell's box of q and the "
+            "parameters): narrow the box's mass and inertia intervals, or use more cells"
+        )
+    if term is None:
+        margin = figures.get("margin", math.nan)
+        return (
+            text + f"; the period's perturbation b exceeds its contraction a (a - b = {margin:.3g}"
+            "): b grows with T Kr and T |qd|, so a shorter period or a lower Kr helps"
+        )
+    share = figures["term_shares"][term]
+    text += (
+        f"; the floor is {share:.0%} '{term}' ({TERMS[term]}), at t = "
+        f"{figures['worst_time']:.3g} s, through joint '{figures['lightest_joint']}'"
+        " (the lightest mode)"
+    )
+    link = figures.get("dominant_link")
+    if link is not None:
+        text += (
+            f"; link '{link}' is {figures['dominant_link_share']:.0%} of the mismatch: "
+            "narrowing its box lowers the mismatch and deviation terms"
+        )
+    if term == "disturbance":
+        text += "; a smaller disturbance bound or a larger Kr lowers it in proportion"
+    return text
+
+
+def lightest_joint(floor_of: CellFloor, quantities: dict, cell: int) -> int:
+    """The joint whose diagonal of ``M_L^-1`` is largest at a cell (the lightest mode's joint)."""
+    inverse = quantities["law_inverse_diagonal"][cell]
+    return int(np.argmax(inverse))
