@@ -56,6 +56,18 @@ def ur5():
     return load_robot("ur5")
 
 
+@pytest.fixture(scope="module")
+def rr_rig():
+    """The paper's arm for the robot-loop tests: the URDF robot, its shipped true plant and a
+    1 kHz interval controller."""
+    robot = load_robot("rr_planar")
+    from urpc.control.synthesis import synthesize
+
+    box = load_uncertainty("rr_planar", robot)
+    plant = box.plant(robot, load_parameter_point("rr_planar", robot, box))
+    return robot, plant, synthesize(robot, box, 1e-2, sample_period=1e-3)
+
+
 @pytest.fixture
 def counted(monkeypatch):
     """The certificates actually computed (calls of urpc.control.certificate.certify), for the

@@ -49,28 +49,25 @@ def base(rr, rr_box):
     }
 
 
-def _certify(configuration, **kwargs):
+def _call(function, configuration, **kwargs):
+    """``function(controller, trajectory, duration=..., ...)`` of a configuration."""
     c = configuration
-    return cached_certify(
+    return function(
         c["controller"], c["trajectory"], duration=c["duration"],
         disturbance_bound=c["disturbance_bound"], cells=c.get("cells"), **kwargs,
     )  # fmt: skip
 
 
+def _certify(configuration, **kwargs):
+    return _call(cached_certify, configuration, **kwargs)
+
+
 def _fresh(configuration):
-    c = configuration
-    return certify(
-        c["controller"], c["trajectory"], duration=c["duration"],
-        disturbance_bound=c["disturbance_bound"], cells=c.get("cells"),
-    )  # fmt: skip
+    return _call(certify, configuration)
 
 
 def _key(configuration):
-    c = configuration
-    return certificate_key(
-        c["controller"], c["trajectory"], duration=c["duration"],
-        disturbance_bound=c["disturbance_bound"], cells=c.get("cells"),
-    )  # fmt: skip
+    return _call(certificate_key, configuration)
 
 
 # ============================================================================ the record

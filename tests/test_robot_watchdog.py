@@ -2,7 +2,6 @@
 the virtual arm's 20 ms torque timeout, and whole runs stopped by them."""
 
 import numpy as np
-import pytest
 
 import urpc
 from urpc.robot.loop import ControlLoop
@@ -45,17 +44,8 @@ def test_silence():
     assert dog.check_silence(1.0101) and "no state" in dog.message
 
 
-@pytest.fixture(scope="module")
-def rr():
-    robot = urpc.load_robot("rr_planar")
-    box = urpc.load_uncertainty("rr_planar", robot)
-    plant = box.plant(robot, urpc.load_parameter_point("rr_planar", robot, box))
-    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
-    return robot, plant, controller
-
-
-def test_arm_watchdog_brakes_after_20_ms_without_torque(rr):
-    robot, plant, _ = rr
+def test_arm_watchdog_brakes_after_20_ms_without_torque(rr_rig):
+    robot, plant, _ = rr_rig
     arm = VirtualArm(plant, 1e-3)
     arm.check_watchdog(1.0)
     assert not arm.braked  # not armed before the first torque
@@ -70,8 +60,8 @@ def test_arm_watchdog_brakes_after_20_ms_without_torque(rr):
     assert np.array_equal(arm.state.q, q) and np.all(arm.state.qd == 0)
 
 
-def run_lockstep(rr, response_time, **watchdog):
-    robot, plant, controller = rr
+def run_lockstep(rr_rig, response_time, **watchdog):
+    robot, plant, controller = rr_rig
     clock = FakeClock()
     arm = VirtualArm(plant, 1e-3)
     lockstep = LockstepRobot(arm, clock, response_time)
@@ -81,10 +71,10 @@ def run_lockstep(rr, response_time, **watchdog):
     return report, loop, safety, arm
 
 
-def test_a_stalling_loop_is_stopped_by_its_watchdog_with_the_safe_command(rr):
+def test_a_stalling_loop_is_stopped_by_its_watchdog_with_the_safe_command(rr_rig):
     # On time for 100 cycles, then every answer takes 0.8 ms (deadline 0.5 ms).
     report, loop, safety, arm = run_lockstep(
-        rr, lambda seq: 1e-4 if seq < 100 else 8e-4, late_budget=5
+        rr_rig, lambda seq: 1e-4 if seq < 100 else 8e-4, late_budget=5
     )
     assert report.ending == "watchdog" and "6 consecutive late cycles" in report.message
     assert report.cycles == 106 and safety.counts["watchdog"] == 1
@@ -92,7 +82,7 @@ def test_a_stalling_loop_is_stopped_by_its_watchdog_with_the_safe_command(rr):
     assert arm.braked  # robot.stop() after the fault
 
 
-def test_a_silent_robot_trips_the_loop(rr):
+def test_a_silent_robot_trips_the_loop(rr_rig):
     class Silent(LockstepRobot):
         def read_state(self, timeout):
             if self.arm.seq >= 50:
@@ -100,7 +90,7 @@ def test_a_silent_robot_trips_the_loop(rr):
                 return None
             return super().read_state(timeout)
 
-    robot, plant, controller = rr
+    robot, plant, controller = rr_rig
     clock = FakeClock()
     silent = Silent(VirtualArm(plant, 1e-3), clock, 1e-4)
     loop = ControlLoop(controller, urpc.PaperTrajectory())

@@ -66,17 +66,8 @@ def test_watchdog_across_the_wrap_with_lost_and_reordered_samples():
     assert dog.arrived(5, 0.007) and dog.lost_samples == 3
 
 
-@pytest.fixture(scope="module")
-def rr():
-    robot = urpc.load_robot("rr_planar")
-    box = urpc.load_uncertainty("rr_planar", robot)
-    plant = box.plant(robot, urpc.load_parameter_point("rr_planar", robot, box))
-    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
-    return robot, plant, controller
-
-
-def lockstep_run(rr, first_seq, *, delay=0, robot_class=LockstepRobot, duration=0.05):
-    robot, plant, controller = rr
+def lockstep_run(rr_rig, first_seq, *, delay=0, robot_class=LockstepRobot, duration=0.05):
+    robot, plant, controller = rr_rig
     clock = FakeClock()
     arm = VirtualArm(plant, 1e-3, ArmOptions(delay=delay), first_seq=first_seq)
     lockstep = robot_class(arm, clock, 1e-4)
@@ -88,12 +79,12 @@ def lockstep_run(rr, first_seq, *, delay=0, robot_class=LockstepRobot, duration=
 
 
 @pytest.mark.parametrize("delay", [0, 1])
-def test_a_run_across_the_wrap_is_the_run_far_from_it(rr, delay):
+def test_a_run_across_the_wrap_is_the_run_far_from_it(rr_rig, delay):
     """Started 2 samples before the wrap (2**32 - 2, 2**32 - 1, 0, 1, ...), with and without
     the one-sample delay (the torque answering 2**32 - 1 applies over the period of 0): the
     same torques, states and loop times, bit for bit, as a run numbered from 0."""
-    far, loop_far, arm_far, _, _ = lockstep_run(rr, 0, delay=delay)
-    near, loop_near, arm_near, _, _ = lockstep_run(rr, TOP - 1, delay=delay)
+    far, loop_far, arm_far, _, _ = lockstep_run(rr_rig, 0, delay=delay)
+    near, loop_near, arm_near, _, _ = lockstep_run(rr_rig, TOP - 1, delay=delay)
     assert far.ok and near.ok and near.cycles == far.cycles == 51
     assert near.watchdog["lost_samples"] == 0 and near.safety["counts"]["stale_state"] == 0
     assert arm_near.late == arm_far.late == 0  # every torque found the period it answers
@@ -127,9 +118,9 @@ class LossyReordered(LockstepRobot):
         return state
 
 
-def test_lost_and_reordered_states_at_the_wrap(rr):
+def test_lost_and_reordered_states_at_the_wrap(rr_rig):
     report, loop, arm, robot, safety = lockstep_run(
-        rr, TOP - 2, robot_class=LossyReordered, duration=0.03
+        rr_rig, TOP - 2, robot_class=LossyReordered, duration=0.03
     )
     assert robot.delivered[:6] == [TOP - 2, TOP - 1, 0, TOP, 2, 3]
     assert report.ok
