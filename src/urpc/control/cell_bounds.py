@@ -162,22 +162,52 @@ class CenteredCoriolis:
     ``sup ||P C P^T|| <= A + B dv`` for every velocity box of centre ``v_c`` and radii ``dv``, so
     that a wider velocity box (a larger ``r_max``) costs no new enclosure."""
 
-    def __init__(self, regressor: BallRegressor, q: Ball, v_center: np.ndarray, parameters: Ball):
+    def __init__(
+        self,
+        regressor: BallRegressor,
+        q: Ball,
+        v_center: np.ndarray,
+        parameters: Ball,
+        christoffel: Ball | None = None,
+    ):
         pi_center = Ball.point(parameters.mid)
         free = np.flatnonzero(parameters.rad > 0)
         self.pi_rad = parameters.rad[free]
-        directions = np.zeros((len(free), parameters.mid.shape[0]))
-        directions[np.arange(len(free)), free] = 1.0
+        directions = unit_directions(parameters)
         v_point = Ball.point(v_center)
         self.center = regressor.coriolis_matrices(q, v_point, pi_center[None])[:, 0]
-        # C(q; e_k) for the centre and every direction at once, (cells, k, 1 + free, n, n).
-        rows = Ball.point(np.concatenate([pi_center.mid[None], directions]))
-        each = regressor.christoffel_matrices(q, rows)
-        self.per_velocity = each[:, :, 0]
+        # C(q; e_k) for the centre and every direction, (cells, k, 1 + free, n, n).
+        if christoffel is None:
+            rows = Ball.point(np.concatenate([pi_center.mid[None], directions]))
+            christoffel = regressor.christoffel_matrices(q, rows)
+        self.per_velocity = christoffel[:, :, 0]
         self.per_parameter = self.per_both = None
         if len(free):
             self.per_parameter = regressor.coriolis_matrices(q, v_point, directions)
-            self.per_both = each[:, :, 1:]  # (cells, k, j, n, n)
+            self.per_both = christoffel[:, :, 1:]  # (cells, k, j, n, n)
+
+    @classmethod
+    def sharing(
+        cls, regressor: BallRegressor, q: Ball, forms: list[tuple[np.ndarray, Ball]]
+    ) -> list[CenteredCoriolis]:
+        """One form per ``(v_center, parameters)`` over the same box of ``q``, for parameter
+        boxes of the same radii (a box and its offset, as the plant's hull and the mismatch):
+        ``C(q; e_k)`` of their common directions is enclosed once, with every centre, in one
+        call (each row is computed as it would be alone, up to the order of rounding)."""
+        radii = forms[0][1].rad
+        if any(not np.array_equal(parameters.rad, radii) for _, parameters in forms):
+            raise ValueError("CenteredCoriolis.sharing needs parameter boxes of equal radii")
+        centres = np.stack([parameters.mid for _, parameters in forms])
+        rows = Ball.point(np.concatenate([centres, unit_directions(forms[0][1])]))
+        each = regressor.christoffel_matrices(q, rows)
+        count = len(forms)
+        return [
+            cls(
+                regressor, q, v_center, parameters,
+                each[:, :, np.r_[index, count : each.shape[2]]],
+            )
+            for index, (v_center, parameters) in enumerate(forms)
+        ]  # fmt: skip
 
     def coefficients(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(A, B)``, shapes (cells,) and (cells, n): ``sup ||P C P^T||_2 <= A + B dv`` per cell
@@ -204,6 +234,14 @@ class CenteredCoriolis:
             constant = constant + summed(self.per_parameter, self.pi_rad)
             per_velocity = per_velocity + summed(self.per_both, self.pi_rad)  # (cells, k)
         return constant * (1 + LAPACK_MARGIN), per_velocity * (1 + LAPACK_MARGIN)
+
+
+def unit_directions(parameters: Ball) -> np.ndarray:
+    """The unit vectors of the parameters with a non-zero radius, (free, parameters)."""
+    free = np.flatnonzero(parameters.rad > 0)
+    directions = np.zeros((len(free), parameters.mid.shape[0]))
+    directions[np.arange(len(free)), free] = 1.0
+    return directions
 
 
 def velocity_bound(

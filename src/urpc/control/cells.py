@@ -198,8 +198,9 @@ class CellFloor:
         mismatch = Ball(hull.mid - self._parameters[0], hull.rad)
         # The plant's Coriolis matrix (every plant of the box, over the plant's velocity box,
         # affine in its radii) and the Coriolis mismatch along qd_a, as centered forms.
-        coriolis = CenteredCoriolis(self.regressor, q.val, q.dot.mid, hull)
-        coriolis_mismatch = CenteredCoriolis(self.regressor, q.val, qd_a.val.mid, mismatch)
+        coriolis, coriolis_mismatch = CenteredCoriolis.sharing(
+            self.regressor, q.val, [(q.dot.mid, hull), (qd_a.val.mid, mismatch)]
+        )
         # d/dt of the nominal torque Y_SL pi0 (held over the period while the reference moves).
         pi0 = Ball.point(self._parameters[0])
         torque_rate = matvec(Y.dot, pi0)

@@ -316,14 +316,10 @@ def _inertia_map(x):
 
     def build(v):
         a, b, c = v[..., 0], v[..., 1], v[..., 2]
-        z = np.zeros_like(a)
-        return np.stack(
-            [
-                np.stack([a, b, z, c, z, z], -1),
-                np.stack([z, a, b, z, c, z], -1),
-                np.stack([z, z, z, a, b, c], -1),
-            ],
-            -2,
-        )
+        out = np.zeros(v.shape[:-1] + (3, 6))
+        out[..., 0, 0], out[..., 0, 1], out[..., 0, 3] = a, b, c
+        out[..., 1, 1], out[..., 1, 2], out[..., 1, 4] = a, b, c
+        out[..., 2, 3], out[..., 2, 4], out[..., 2, 5] = a, b, c
+        return out
 
-    return Ball(build(x.mid), np.abs(build(x.rad)))
+    return Ball(build(x.mid), build(x.rad))
