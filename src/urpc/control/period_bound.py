@@ -10,6 +10,7 @@ torque the law commands in that regime (:meth:`PeriodBound.torque_bound`).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -166,12 +167,26 @@ class PeriodBound:
 def response_sum(a: np.ndarray, terms: int = 4096) -> np.ndarray:
     """``S(a) = sum_j max_{a <= x <= 1} x (1 - x)^j`` per entry of ``a`` (in (0, 1]): the sum
     of ``||A (1 - A)^j||`` over the loop's memory for ``a I <= A <= I``. Each term is at its
-    maximum ``x = max(a, 1 / (j + 1))``; past ``terms`` the tail ``(1 - a)^terms`` is added
-    whole (it bounds ``sum_{j >= terms} a (1 - a)^j``, and ``1 / (j + 1) < a`` there once
-    ``terms >= 1 / a``; for smaller ``a`` the remaining harmonic terms are bounded by
-    ``sum_{j >= terms} 1 / (j + 1)``, infinite, so ``a`` below ``1 / terms`` gives ``inf``)."""
+    maximum ``x = max(a, 1 / (j + 1))``: ``1 / (j + 1)`` for ``j < J`` (``J`` the first ``j``
+    with ``1 / (j + 1) < a``), a table of partial sums independent of ``a``, and ``a`` from
+    ``J`` on, whose terms ``a (1 - a)^j`` sum to ``(1 - a)^J`` exactly. ``a`` below
+    ``1 / terms`` (past the table) gives ``inf``."""
     a = np.asarray(a, dtype=float)
-    j = np.arange(terms)[:, None]
-    x = np.maximum(a[None], 1.0 / (j + 1))
-    total = np.sum(x * (1 - x) ** j, axis=0) + (1 - a) ** terms
-    return np.where(a * terms >= 1.0, total * (1 + 1e-12), math.inf)
+    partial = _harmonic_partial_sums(terms)
+    usable = a * terms >= 1.0
+    safe = np.where(usable, a, 1.0)
+    # J: the first j with 1 / (j + 1) < a, found from floor(1 / a) with the same comparison
+    # as the terms themselves (at most two steps either way).
+    J = np.clip(np.floor(1.0 / safe) - 2, 0, terms).astype(int)
+    for _ in range(5):
+        J = np.where((J < terms) & (1.0 / (J + 1) >= safe), J + 1, J)
+    total = partial[J] + (1 - safe) ** J
+    return np.where(usable, total * (1 + 1e-12), math.inf)
+
+
+@functools.cache
+def _harmonic_partial_sums(terms: int) -> np.ndarray:
+    """``sum_{j < J} x_j (1 - x_j)^j`` with ``x_j = 1 / (j + 1)``, for ``J = 0 .. terms``."""
+    j = np.arange(terms, dtype=float)
+    x = 1.0 / (j + 1)
+    return np.concatenate([[0.0], np.cumsum(x * (1 - x) ** j)])
