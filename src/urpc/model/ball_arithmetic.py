@@ -163,19 +163,32 @@ def matmul(A, B):
     # when grouped); the radius is itself a sum of 2 k non-negative products (two k-term sums
     # added), rounded with a relative error below (k + 3) u: it is inflated by twice that.
     batch_A, batch_B = A.mid.shape[:-2], B.mid.shape[:-2]
-    if batch_B and (batch_A == batch_B or not batch_A):
+    if batch_B and batch_A == batch_B:
         return _compiled_matmul(A, B)
     terms = A.mid.shape[-1]
     absB = np.abs(B.mid)
-    mid = A.mid @ B.mid
-    rad = np.abs(A.mid) @ (B.rad + (terms + 2) * U * absB) + A.rad @ (absB + B.rad)
+    mid = _product(A.mid, B.mid)
+    rad = _product(np.abs(A.mid), B.rad + (terms + 2) * U * absB)
+    if A.rad.any():
+        rad = rad + _product(A.rad, absB + B.rad)
     return Ball(mid, rad * (1.0 + 2 * (terms + 4) * U))
 
 
+def _product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a @ b`` (numpy's broadcasting), as one matrix product when ``a`` is a single matrix
+    for a batch of ``b`` (numpy's batched product makes a library call per small matrix)."""
+    if a.ndim != 2 or b.ndim < 3:
+        return a @ b
+    rows, (terms, columns) = a.shape[0], b.shape[-2:]
+    stacked = np.moveaxis(b, -2, 0).reshape(terms, -1)
+    out = (a @ stacked).reshape((rows,) + b.shape[:-2] + (columns,))
+    return np.moveaxis(out, 0, -2)
+
+
 def _compiled_matmul(A: Ball, B: Ball) -> Ball:
-    """:func:`matmul` for a batch of ``B`` and a batch of ``A`` of the same shape, or one
-    matrix ``A`` for all: one compiled pass (numpy's batched product makes a library call per
-    small matrix, and the radius costs it three products and five temporaries)."""
+    """:func:`matmul` for batches of ``A`` and ``B`` of the same shape: one compiled pass
+    (numpy's batched product makes a library call per small matrix, and the radius costs it
+    three products and five temporaries)."""
     batch = B.mid.shape[:-2]
     (rows, terms), columns = A.mid.shape[-2:], B.mid.shape[-1]
 
@@ -201,17 +214,14 @@ def _compiled_matmul(A: Ball, B: Ball) -> Ball:
     boundscheck=False,
 )
 def _ball_matmul_kernel(Am, Ar, Bm, Br, rounding, inflation, mid, rad):  # pragma: no cover
-    """``mid = Am @ Bm`` and its radius over the batch of ``B`` (``A``'s batch is the same, or
-    one matrix for all). Compiled: IEEE arithmetic, no fast-math; each sum runs in order, so a
-    k-term sum has the relative error ``(k - 1) u`` of the analysis in :func:`matmul`, or
-    less."""
+    """``mid = Am @ Bm`` and its radius over the batch. Compiled: IEEE arithmetic, no
+    fast-math; each sum runs in order, so a k-term sum has the relative error ``(k - 1) u`` of
+    the analysis in :func:`matmul`, or less."""
     batch, terms, columns = Bm.shape
     rows = Am.shape[1]
-    shared = Am.shape[0] == 1
     first_factor = np.empty((terms, columns))  # rad_B + (k + 2) u |B|
     second_factor = np.empty((terms, columns))  # |B| + rad_B
     for b in range(batch):
-        a_index = 0 if shared else b
         for k in range(terms):
             for j in range(columns):
                 absx = abs(Bm[b, k, j])
@@ -223,10 +233,10 @@ def _ball_matmul_kernel(Am, Ar, Bm, Br, rounding, inflation, mid, rad):  # pragm
                 first = 0.0
                 second = 0.0
                 for k in range(terms):
-                    a = Am[a_index, i, k]
+                    a = Am[b, i, k]
                     m += a * Bm[b, k, j]
                     first += abs(a) * first_factor[k, j]
-                    second += Ar[a_index, i, k] * second_factor[k, j]
+                    second += Ar[b, i, k] * second_factor[k, j]
                 mid[b, i, j] = m
                 rad[b, i, j] = (first + second) * inflation
 
