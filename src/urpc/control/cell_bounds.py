@@ -236,6 +236,40 @@ class CenteredCoriolis:
         return constant * (1 + LAPACK_MARGIN), per_velocity * (1 + LAPACK_MARGIN)
 
 
+#: The Coriolis forms are enclosed over at most this many bytes of recursion at a time (their
+#: Christoffel batch grows as ``n^4`` per cell: a 10-link chain holds 5 MB per cell).
+CORIOLIS_CHUNK_BYTES = 2**28
+
+
+def coriolis_coefficients(
+    regressor: BallRegressor,
+    q: Ball,
+    forms: list[tuple[np.ndarray, Ball]],
+    factors: list[np.ndarray],
+) -> list[list[tuple[np.ndarray, np.ndarray]]]:
+    """:meth:`CenteredCoriolis.coefficients` of each form of :meth:`CenteredCoriolis.sharing`
+    through each factor ``P`` ((cells, n, n)), computed over chunks of cells so that memory
+    stays bounded whatever the arm (every cell's enclosure is independent of the others'):
+    ``out[form][factor] = (A, B)``."""
+    cells, n = q.mid.shape
+    rows = len(forms) + int(np.count_nonzero(forms[0][1].rad))
+    per_cell = n * (n + 1) // 2 * rows * n * 3 * 8 * 4  # the backward pass's force rows
+    chunk = max(1, int(CORIOLIS_CHUNK_BYTES // max(per_cell, 1)))
+    parts: list[list[list[tuple[np.ndarray, np.ndarray]]]] = []
+    for start in range(0, cells, chunk):
+        part = slice(start, min(cells, start + chunk))
+        chunk_forms = [(v[part], parameters) for v, parameters in forms]
+        shared = CenteredCoriolis.sharing(regressor, q[part], chunk_forms)
+        parts.append([[form.coefficients(P[part]) for P in factors] for form in shared])
+    return [
+        [
+            tuple(np.concatenate([p[f][k][i] for p in parts]) for i in range(2))
+            for k in range(len(factors))
+        ]
+        for f in range(len(forms))
+    ]
+
+
 def unit_directions(parameters: Ball) -> np.ndarray:
     """The unit vectors of the parameters with a non-zero radius, (free, parameters)."""
     free = np.flatnonzero(parameters.rad > 0)

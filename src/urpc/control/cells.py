@@ -27,10 +27,10 @@ from ..model.uncertainty import ParameterBox
 from ..trajectories import Trajectory
 from .cell_bounds import (
     LAPACK_MARGIN,
-    CenteredCoriolis,
     InertiaModel,
     MismatchNorms,
     congruence,
+    coriolis_coefficients,
     inertia_model,
     link_parameters,
     plant_hull,
@@ -198,8 +198,13 @@ class CellFloor:
         mismatch = Ball(hull.mid - self._parameters[0], hull.rad)
         # The plant's Coriolis matrix (every plant of the box, over the plant's velocity box,
         # affine in its radii) and the Coriolis mismatch along qd_a, as centered forms.
-        coriolis, coriolis_mismatch = CenteredCoriolis.sharing(
-            self.regressor, q.val, [(q.dot.mid, hull), (qd_a.val.mid, mismatch)]
+        # Through each piece's M_L factor (cell by cell chunks, see coriolis_coefficients).
+        lowers = [models[2 + 2 * k] for k in range(len(self._links))]
+        coriolis, coriolis_mismatch = coriolis_coefficients(
+            self.regressor,
+            q.val,
+            [(q.dot.mid, hull), (qd_a.val.mid, mismatch)],
+            [lower.inverse_factor for lower in lowers],
         )
         # d/dt of the nominal torque Y_SL pi0 (held over the period while the reference moves).
         pi0 = Ball.point(self._parameters[0])
@@ -286,7 +291,7 @@ class CellFloor:
                 Rdot, RdotM, Vdot = Rdot + equilibrium, RdotM + metric, Vdot + magnitude
             lag_e, lag_M_e = (x[0] for x in metrics.vector(torque_per_error_rate)[:2])
             to_lower = 1.0 / (1 - np.minimum(lower.eps, 0.999999)) * (1 + LAPACK_MARGIN)
-            constant, per_velocity = coriolis_mismatch.coefficients(lower.inverse_factor)
+            constant, per_velocity = coriolis_mismatch[k]
             # Along qd_a = qd_d + Kr e: the reference's box plus Kr e with ||e|| <= tube.
             gamma_delta = velocity_bound(
                 constant, per_velocity, reference_velocity.rad, self.Kr * tube, tube, self.Kr
@@ -299,7 +304,7 @@ class CellFloor:
                     "metrics": metrics,
                     "R": R, "RM": RM, "Rs": Rs, "V": V, "Rdot": Rdot, "RdotM": RdotM,
                     "Vdot": Vdot,
-                    "coriolis_coefficients": coriolis.coefficients(lower.inverse_factor),
+                    "coriolis_coefficients": coriolis[k],
                     "to_lower": to_lower,
                     "gamma_delta": gamma_delta * (1 + LAPACK_MARGIN),
                     "static": {
