@@ -146,8 +146,5 @@ class SampledSearch:
             )
             if link is not None:
                 out["dominant_link"], out["dominant_link_share"] = link
-        if self.controller.adaptive and self.controller.phi_I > 0:
-            s_max = (self.controller.phi_max - self.controller.phi_P) / self.controller.phi_I
-            #: Before the gains saturate, ||e_k|| >= epsilon for at most s_max / epsilon seconds.
-            out["time_above_epsilon_before_saturation"] = s_max / self.epsilon
+        out.update(self.controller.gain_law.saturation_figures())
         return out
