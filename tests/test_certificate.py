@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import SLIDER
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -282,13 +283,6 @@ def test_a_trajectory_without_a_jerk_bound_is_refused_with_the_fix(rr, rr_box):
     controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=1e-4)
     with pytest.raises(urpc.InputError, match="jerk_bound"):
         certify(controller, Mine(), duration=1.0, disturbance_bound=1.0)
-
-
-SLIDER = """<robot name="slider"><link name="base"/>
-<link name="cart"><inertial><origin xyz="0 0 0"/><mass value="2.0"/>
-<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
-<joint name="x" type="prismatic"><parent link="base"/><child link="cart"/><axis xyz="1 0 0"/>
-<limit lower="-1" upper="1" effort="100" velocity="2"/></joint></robot>"""
 
 
 def test_a_one_joint_robot_is_certified_and_runs(tmp_path):
