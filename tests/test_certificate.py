@@ -11,6 +11,7 @@ configuration; (3) the configuration an aliasing grid once certified is not cert
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -225,6 +226,19 @@ def test_the_paper_law_under_a_hold_is_not_certified(rr, rr_box):
     assert not certificate.certified
     assert certificate.failed[0].name.startswith("paper law")
     assert "implicit" in certificate.failed[0].explanation
+
+
+def test_the_paper_law_with_constant_gains_names_why_it_is_not_certified(rr, rr_box):
+    """Theorem 1 keeps the gain below the hold's stability limit, but no argument bounds the held
+    law: not certified, and the summary names the failed condition (it once had none to name)."""
+    known = dataclasses.replace(rr_box, disturbance_bound=10.0)
+    controller = urpc.synthesize(rr, known, 1e-2, sample_period=1e-3, sampled_law="paper")
+    certificate = certify(controller, PaperTrajectory(), duration=4.0)
+    assert not certificate.certified and certificate.epsilon_floor == math.inf
+    stability = next(c for c in certificate.conditions if "stability limit" in c.name)
+    assert stability.holds  # phi_P = 1 < 2 lambda_L / T
+    assert [c.name for c in certificate.failed] == ["paper law: an ultimate bound under the hold"]
+    assert "fails: paper law: an ultimate bound under the hold" in certificate.summary()
 
 
 def test_an_uncertified_period_names_the_failed_condition_and_the_period_that_works(rr, rr_box):

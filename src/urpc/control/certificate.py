@@ -47,7 +47,7 @@ from .interval import IntervalPassivityController
 #: a default): the certificate cache (:mod:`urpc.control.certificate_cache`) keys every record on
 #: it, so that no certificate of an older argument is ever reused. (The key also holds urpc's
 #: version and a digest of its source.)
-CERTIFICATE_VERSION = 2
+CERTIFICATE_VERSION = 3
 
 
 @dataclass(frozen=True)

@@ -98,8 +98,9 @@ class ContinuousFeedback(FeedbackLaw):
 
 
 class HeldFeedback(FeedbackLaw):
-    """The paper's law under a zero-order hold of period ``T``: no floor follows, and the gain
-    must stay below the hold's stability limit ``2 lambda_L / T`` (it does not under Theorem 2)."""
+    """The paper's law under a zero-order hold of period ``T``: never certified. No floor
+    follows (a condition that always fails says so), and the gain must stay below the hold's
+    stability limit ``2 lambda_L / T`` (it does not under Theorem 2)."""
 
     name = "paper"
 
@@ -111,13 +112,21 @@ class HeldFeedback(FeedbackLaw):
         figures = floor_of.inertia_figures(T)
         limit = 2.0 * figures["lambda_L"] / T
         gain = controller.gain_law.settled_phi(controller.phi_max)
-        condition = Condition(
-            "paper law: gain below the hold's stability limit 2 lambda_L / T",
-            gain < limit, gain, limit,
-            "the paper's gain grows without bound under Theorem 2 and diverges once D T > "
-            "2 lambda: use the implicit sampled law (sampled_law: implicit)",
-        )  # fmt: skip
-        return LawArgument(math.inf, [condition], figures)
+        conditions = [
+            Condition(
+                "paper law: gain below the hold's stability limit 2 lambda_L / T",
+                gain < limit, gain, limit,
+                "the paper's gain grows without bound under Theorem 2 and diverges once D T > "
+                "2 lambda: use the implicit sampled law (sampled_law: implicit)",
+            ),
+            Condition(
+                "paper law: an ultimate bound under the hold", False, math.inf,
+                controller.epsilon,
+                "no argument bounds the paper's law under a hold, even with constant gains below "
+                "the stability limit: use the implicit sampled law (sampled_law: implicit)",
+            ),
+        ]  # fmt: skip
+        return LawArgument(math.inf, conditions, figures)
 
 
 class ImplicitFeedback(FeedbackLaw):
