@@ -90,6 +90,14 @@ def panda():
     return load_robot("panda", locked_joints=PANDA_FINGERS)
 
 
+#: A one-joint robot: a cart on a prismatic joint (constant scalar inertia, 2 kg).
+SLIDER = """<robot name="slider"><link name="base"/>
+<link name="cart"><inertial><origin xyz="0 0 0"/><mass value="2.0"/>
+<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+<joint name="x" type="prismatic"><parent link="base"/><child link="cart"/><axis xyz="1 0 0"/>
+<limit lower="-1" upper="1" effort="100" velocity="2"/></joint></robot>"""
+
+
 def rr_closed_form(q, qd, m2, lc2, I2, m1=10.0, lc1=0.5, I1=10 / 12, l1=1.0, g0=9.81):
     """The textbook RR arm (Spong et al. Sec. 7.4), written independently of Pinocchio:
     returns M, C (Christoffel), g."""

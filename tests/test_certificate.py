@@ -11,10 +11,12 @@ configuration; (3) the configuration an aliasing grid once certified is not cert
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
+from conftest import SLIDER
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -226,6 +228,19 @@ def test_the_paper_law_under_a_hold_is_not_certified(rr, rr_box):
     assert "implicit" in certificate.failed[0].explanation
 
 
+def test_the_paper_law_with_constant_gains_names_why_it_is_not_certified(rr, rr_box):
+    """Theorem 1 keeps the gain below the hold's stability limit, but no argument bounds the held
+    law: not certified, and the summary names the failed condition (it once had none to name)."""
+    known = dataclasses.replace(rr_box, disturbance_bound=10.0)
+    controller = urpc.synthesize(rr, known, 1e-2, sample_period=1e-3, sampled_law="paper")
+    certificate = certify(controller, PaperTrajectory(), duration=4.0)
+    assert not certificate.certified and certificate.epsilon_floor == math.inf
+    stability = next(c for c in certificate.conditions if "stability limit" in c.name)
+    assert stability.holds  # phi_P = 1 < 2 lambda_L / T
+    assert [c.name for c in certificate.failed] == ["paper law: an ultimate bound under the hold"]
+    assert "fails: paper law: an ultimate bound under the hold" in certificate.summary()
+
+
 def test_an_uncertified_period_names_the_failed_condition_and_the_period_that_works(rr, rr_box):
     controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=2e-3)
     certificate = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
@@ -282,13 +297,6 @@ def test_a_trajectory_without_a_jerk_bound_is_refused_with_the_fix(rr, rr_box):
     controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=1e-4)
     with pytest.raises(urpc.InputError, match="jerk_bound"):
         certify(controller, Mine(), duration=1.0, disturbance_bound=1.0)
-
-
-SLIDER = """<robot name="slider"><link name="base"/>
-<link name="cart"><inertial><origin xyz="0 0 0"/><mass value="2.0"/>
-<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
-<joint name="x" type="prismatic"><parent link="base"/><child link="cart"/><axis xyz="1 0 0"/>
-<limit lower="-1" upper="1" effort="100" velocity="2"/></joint></robot>"""
 
 
 def test_a_one_joint_robot_is_certified_and_runs(tmp_path):

@@ -10,7 +10,7 @@ import pytest
 
 import urpc
 from urpc.cli import main
-from urpc.control.interval import implicit_feedback, positive_part
+from urpc.control.feedback import implicit_feedback, positive_part
 
 #: The RR arm's link 2 (I_C = diag(5/3, 5/12, 5/3) kg m^2) with independent inertia intervals
 #: that break the triangle inequality izz <= ixx + iyy in part of the box: partly no rigid body.

@@ -17,7 +17,7 @@ BOUND_METHODS = ("hull", "vertex", "rigorous")
 #: Plants that integrate the true robot (:func:`urpc.sim.plants.make_plant`).
 PLANT_BACKENDS = ("pinocchio", "mujoco")
 #: How a sampled interval controller runs: ``implicit`` (the certified sampled-data law of
-#: :mod:`urpc.control.interval`) or ``paper`` (the paper's law unchanged under the hold).
+#: :mod:`urpc.control.feedback`) or ``paper`` (the paper's law unchanged under the hold).
 SAMPLED_LAWS = ("implicit", "paper")
 #: The uniform error gains Kr [1/s] the certified synthesis of Kr tries
 #: (:func:`urpc.search_gains`, ``urpc certify --search-kr``).

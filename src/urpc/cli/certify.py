@@ -65,7 +65,7 @@ def run_certify(args) -> int:
         from ..errors import InputError
 
         probe = build_controller(build(scenario), "interval")
-        if probe.sample_period is not None and probe.sampled_law == "paper":
+        if probe.feedback.name == "paper":  # the held paper law
             raise InputError(
                 "--search-kr needs the implicit sampled law: the paper's law under a hold is "
                 "never certified, whatever Kr; give --sampled-law implicit",

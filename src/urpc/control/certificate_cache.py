@@ -264,7 +264,7 @@ def cached_certify(
 def _describe(controller, trajectory: Trajectory, duration: float, disturbance) -> str:
     """One line naming the configuration of a record (for a person reading the file)."""
     period = controller.sample_period
-    law = "continuous" if period is None else f"{controller.sampled_law} law, T = {period:g} s"
+    law = "continuous" if period is None else f"{controller.feedback.name} law, T = {period:g} s"
     d = "the box's" if disturbance is None else f"{float(disturbance):g}"
     return (
         f"{controller.robot.name}: {law}, epsilon = {controller.epsilon:g}, "

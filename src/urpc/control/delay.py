@@ -9,7 +9,7 @@ and the torque already on its way, with the nominal model (armature included)::
     qdd_k     = M0(q_k)^-1 (u_{k-1} - C0(q_k, qd_k) qd_k - g0(q_k))      (one ABA)
     q_{k+1}^  = q_k + T qd_k + T^2/2 qdd_k,       qd_{k+1}^ = qd_k + T qdd_k
 
-and evaluates the interval law (implicit or paper, :mod:`urpc.control.interval`) at
+and evaluates the interval law (implicit or paper, :mod:`urpc.control.feedback`) at
 ``(t_k + T, q_{k+1}^, qd_{k+1}^)`` against the reference one period ahead, extrapolated from the
 reference at ``t_k`` by its Taylor polynomial (``q_d + T qd_d + T^2/2 qdd_d``, ``qd_d + T qdd_d``,
 ``qdd_d``; the error is ``T^3/6`` and ``T^2/2`` times the reference's jerk: 8e-9 rad and 2.5e-5 rad/s

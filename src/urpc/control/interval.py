@@ -12,35 +12,24 @@ With the tracking error ``e = q_d - q`` and the diagonal gain ``Kr``::
 per-joint magnitude ``max(|lower_i|, |upper_i|)`` of an enclosure of the mismatch torque ``w``
 over the parameter box (eq. 9), computed by a :class:`~urpc.bounds.BoundMethod` at every step.
 
-* Disturbance bound **unknown** (Theorem 2): the enclosure is taken with ``d = 0`` and the gains
-  grow with the dead-zone integral ``s(t) = integral_0^t f(||e||) dt`` [rad s], the controller's
-  only state (``f(x) = 0`` if ``x < epsilon``, else ``x``)::
+The robust gain and the feedback are two small objects the controller composes:
 
-      phi(t) = phi_P + phi_I s(t),      kappa(t) = kappa_P + kappa_I s(t)
+* the **gain law** (:mod:`urpc.control.gain_laws`), chosen by the bound method's
+  ``disturbance_bound``: Theorem 2 (bound **unknown**; the enclosure is taken with ``d = 0`` and
+  the gains grow with the dead-zone integral ``s``, the controller's only state) or Theorem 1
+  (bound **known** and included in the enclosure; constant gains ``phi_P``, ``kappa_P``, no
+  state);
+* the **feedback law** (:mod:`urpc.control.feedback`), chosen by ``sample_period`` and
+  ``sampled_law``: ``D r`` in continuous time (the paper's law), the same law held under a
+  zero-order hold (``sampled_law="paper"``), or the implicit sampled-data law
+  ``D (M_L + D T 1)^{-1} M_L r`` (``sampled_law="implicit"``; not in the paper), which also sets
+  the ceiling ``phi_max`` where adaptation stops.
 
-* Disturbance bound **known** (Theorem 1): the enclosure includes ``d`` and the gains are the
-  constants ``phi_P``, ``kappa_P`` (no state). ``||r||`` is then ultimately bounded by
-  ``sqrt(lambda_max / lambda_min) / kappa_P`` [rad/s].
+Each law carries its part of the certificate (:func:`urpc.control.certificate.certify` asks them).
 
 When the bound method works on the Slotine-Li regressor, one ``Y_SL(q, qd, qd_a, qdd_a)`` per step
 gives both the nominal torque ``Y_SL pi0`` and the enclosure, since
 ``M qdd_a + C qd_a + g = Y_SL pi`` (:mod:`urpc.model.regressor`).
-
-**Sampled-data law** (``sample_period=T``, ``sampled_law="implicit"``; not in the paper). Under a
-zero-order hold the explicit feedback ``v = -D r`` gives, per inertia mode, ``r+ = (1 - D T /
-lambda) r``: unstable once ``D T > 2 lambda``, which the growing gain reaches on light plants. The
-implicit (backward-Euler) discretization evaluates the feedback at the predicted next value of
-``r`` (Acary & Brogliato 2010), with a sound lower bound ``M_L(q)`` of the inertia over the box
-(:class:`~urpc.model.inertia_bounds.InertiaBounds`) as the prediction model::
-
-    D = kappa ||rho|| + phi,       u = M0 qdd_a + C0 qd_a + g0 + D (M_L + D T 1)^{-1} M_L r
-
-one CRBA and one symmetric solve per step. On every plant of the box (``M >= M_L``) the sampled
-loop contracts for every gain, and as ``D -> infinity`` the feedback tends to the dead-beat
-``M_L r / T``. Adaptation stops once ``phi`` reaches ``phi_max = 20 max_q lambda_max(M_U(q)) / T``
-(anti-windup: beyond it a larger gain changes the feedback by less than 5 %). The discrete-time
-argument and its ultimate bound are in ``docs/sampled-data.md`` and :mod:`urpc.control.certificate`.
-``sampled_law="paper"`` keeps the paper's law unchanged under the hold (its reproduction).
 
 Build it with :func:`urpc.control.synthesis.synthesize`, which validates the gains.
 """
@@ -51,16 +40,12 @@ import dataclasses
 import math
 
 import numpy as np
-import pinocchio as pin
-from scipy.linalg.lapack import dposv
 
 from ..bounds.base import BoundMethod
 from ..model.inertia_bounds import InertiaBounds
 from .base import Controller, Reference
-
-#: ``phi_max = PHI_MAX_FACTOR * max_q lambda_max(M_U(q)) / T``: past it, the implicit feedback of
-#: every mode is within ``1 / (1 + PHI_MAX_FACTOR)`` of its dead-beat limit, so adaptation stops.
-PHI_MAX_FACTOR = 20.0
+from .feedback import FeedbackLaw, ImplicitFeedback, feedback_law
+from .gain_laws import AdaptiveGains, ConstantGains, GainLaw
 
 
 class IntervalPassivityController(Controller):
@@ -75,17 +60,21 @@ class IntervalPassivityController(Controller):
         Kr: Diagonal of ``Kr`` [1/s], length ``dof``.
         sample_period: Control period ``T`` [s] when the law runs sampled (zero-order hold);
             ``None``: continuous time, the paper's law.
-        sampled_law: ``"implicit"`` (the sampled-data law of the module docstring) or
+        sampled_law: ``"implicit"`` (the sampled-data law of :mod:`urpc.control.feedback`) or
             ``"paper"`` (the paper's law unchanged under the hold); used with ``sample_period``.
         inertia_bounds: The :class:`~urpc.model.inertia_bounds.InertiaBounds` of the box, required
             by the implicit law.
 
     Attributes:
-        adaptive: True for Theorem 2 (growing gains, one state), False for Theorem 1.
-        implicit: True when the implicit sampled-data law runs (a period and ``"implicit"``).
+        gain_law: The :class:`~urpc.control.gain_laws.GainLaw` (Theorem 1 or 2).
+        feedback: The :class:`~urpc.control.feedback.FeedbackLaw` (continuous, held or
+            implicit).
         phi_max: The ceiling of ``phi`` [N m s/rad] where adaptation stops (implicit law), or
             ``inf``.
         last_rho_norm: ``||rho||`` [N m] of the latest :meth:`output` call (diagnostic cache).
+
+    Raises:
+        ValueError: an unknown ``sampled_law``; the implicit law without ``inertia_bounds``.
     """
 
     name = "interval"
@@ -114,26 +103,22 @@ class IntervalPassivityController(Controller):
         self.kappa_P, self.kappa_I = float(kappa_P), float(kappa_I)
         self.phi_P, self.phi_I = float(phi_P), float(phi_I)
         self.Kr = np.array(Kr, dtype=float).reshape(self.robot.dof)
-        self.adaptive = bound.disturbance_bound is None
-        self.n_states = 1 if self.adaptive else 0
         self.method = bound.name
         self.last_rho_norm = math.nan
-        self.sample_period = None if sample_period is None else float(sample_period)
         self.sampled_law = sampled_law
         self.inertia_bounds = inertia_bounds
-        self.implicit = self.sample_period is not None and sampled_law == "implicit"
-        self.phi_max = math.inf
-        if self.implicit:
-            if inertia_bounds is None:
-                raise ValueError("the implicit sampled law needs the box's inertia bounds")
-            self._lower_robot = inertia_bounds.lower_robot
-            self._identity = np.eye(self.robot.dof)
-            self._stride = self.robot.dof + 1
-            self.phi_max = max(
-                self.phi_P,
-                PHI_MAX_FACTOR * inertia_bounds.max_upper_eigenvalue / self.sample_period,
+        period = None if sample_period is None else float(sample_period)
+        self._feedback = feedback_law(period, sampled_law, inertia_bounds)
+        self.phi_max = self._feedback.phi_ceiling(self.phi_P)
+        if bound.disturbance_bound is None:
+            self._gain_law: GainLaw = AdaptiveGains(
+                self.kappa_P, self.kappa_I, self.phi_P, self.phi_I, self.epsilon, self.phi_max
             )
-        self._s_max = (self.phi_max - self.phi_P) / self.phi_I
+        else:
+            self._gain_law = ConstantGains(self.kappa_P, self.phi_P)
+        self.n_states = self._gain_law.n_states
+        # The two laws' step methods, bound once (the control step's path).
+        self._gain, self._torque = self._gain_law.gain, self._feedback.torque
         self._joints = bound.joints
         self._uses_regressor = bound.uses_regressor
         self._pi0 = np.asarray(self.robot.nominal_parameters, dtype=float)
@@ -141,16 +126,35 @@ class IntervalPassivityController(Controller):
             self._regressor = bound.regressor
             self._enclose_regressor = bound.enclose_regressor
 
+    @property
+    def gain_law(self) -> GainLaw:
+        return self._gain_law
+
+    @property
+    def feedback(self) -> FeedbackLaw:
+        return self._feedback
+
+    @property
+    def sample_period(self) -> float | None:
+        """The feedback law's period [s]; ``None``: continuous time."""
+        return self._feedback.sample_period
+
+    @property
+    def adaptive(self) -> bool:
+        """True for Theorem 2 (growing gains, one state), False for Theorem 1."""
+        return self._gain_law.adaptive
+
+    @property
+    def implicit(self) -> bool:
+        """True when the implicit sampled-data law runs (a period and ``"implicit"``)."""
+        return isinstance(self._feedback, ImplicitFeedback)
+
     def __repr__(self) -> str:
-        theorem = "Theorem 2, adaptive" if self.adaptive else "Theorem 1, constant gains"
-        law = (
-            ""
-            if self.sample_period is None
-            else f", {self.sampled_law} law at T={self.sample_period:g} s"
-        )
+        T = self.sample_period
+        law = "" if T is None else f", {self._feedback.name} law at T={T:g} s"
         return (
             f"IntervalPassivityController({self.robot.name!r}, method={self.method!r}, "
-            f"epsilon={self.epsilon:g}, {theorem}{law})"
+            f"epsilon={self.epsilon:g}, {self._gain_law.description}{law})"
         )
 
     def save(self, path):
@@ -162,15 +166,13 @@ class IntervalPassivityController(Controller):
 
     def gains(self, state: np.ndarray) -> tuple[float, float]:
         """``(phi, kappa)`` for the state ``[s]`` (Theorem 2) or the constants (Theorem 1)."""
-        if self.adaptive:
-            s = float(state[0])
-            return self.phi_P + self.phi_I * s, self.kappa_P + self.kappa_I * s
-        return self.phi_P, self.kappa_P
+        return self._gain_law.gains(state)
 
     def output(
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
     ) -> np.ndarray:
-        """Joint torque ``u`` [N m] of eq. (4) with (10), or the implicit sampled law."""
+        """Joint torque ``u`` [N m] of eq. (4) with the gain law's ``D`` and the feedback law's
+        torque for it."""
         if not (type(q) is type(qd) is type(reference.q) is np.ndarray):
             # Array-likes (lists) from a caller: convert once, off the simulator's path.
             q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
@@ -201,38 +203,13 @@ class IntervalPassivityController(Controller):
         rho = np.maximum(-lower, upper)
         rho_norm = math.sqrt(rho @ rho)
         self.last_rho_norm = rho_norm
-        if self.adaptive:
-            s = state[0]
-            gain = (self.kappa_P + self.kappa_I * s) * rho_norm + self.phi_P + self.phi_I * s
-        else:
-            gain = self.kappa_P * rho_norm + self.phi_P
-        if self.implicit:
-            return nominal + self._sampled_feedback(q, gain, r)
-        return nominal + gain * r
-
-    def _sampled_feedback(self, q: np.ndarray, gain: float, r: np.ndarray) -> np.ndarray:
-        """``D (M_L + D T 1)^{-1} M_L r = D (r - D T y)`` [N m] with ``(M_L + D T 1) y = r``: the
-        implicit feedback from one CRBA (its upper triangle) and one Cholesky solve (LAPACK
-        ``dposv``, which reads the upper triangle only)."""
-        lower = self._lower_robot
-        step = gain * self.sample_period
-        shifted = pin.crba(lower.model, lower.data, lower.configuration(q))
-        shifted.flat[:: self._stride] += step  # the diagonal (half the time of fancy indexing)
-        _, y, info = dposv(shifted, r, lower=0)
-        if info != 0:  # M_L + D T 1 is not positive definite: M_L is indefinite at q
-            return implicit_feedback(positive_part(lower.M(q)), gain, step, r)
-        return gain * (r - step * y)
+        return nominal + self._torque(q, self._gain(rho_norm, state), r)
 
     def state_derivative(
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
     ) -> np.ndarray:
         """``ds/dt = f(||e||)`` [rad] (Theorem 2); empty for Theorem 1."""
-        if not self.adaptive:
-            return np.zeros(0)
-        e = reference.q - q
-        norm = math.sqrt(e @ e)
-        growing = norm >= self.epsilon and state[0] < self._s_max
-        return np.array([norm if growing else 0.0])
+        return self._gain_law.state_derivative(reference.q - q, state)
 
     def advance(
         self,
@@ -245,44 +222,9 @@ class IntervalPassivityController(Controller):
         """The state one sample later, ``min(s + T f(||e||), s_max)`` with ``T`` the
         :attr:`sample_period` (forward Euler; ``s_max`` is where ``phi`` reaches
         :attr:`phi_max`)."""
-        if not self.adaptive:
-            return state
-        e = reference.q - q
-        norm = math.sqrt(e @ e)
-        if norm < self.epsilon or state[0] >= self._s_max:
-            return state
-        return np.array([min(state[0] + self.sample_period * norm, self._s_max)])
+        return self._gain_law.advance(reference.q - q, state, self.sample_period)
 
     def diagnostics(self, state: np.ndarray) -> dict[str, float]:
         """``phi`` [N m s/rad] and ``kappa`` [s/rad] at this state."""
         phi, kappa = self.gains(state)
         return {"phi": phi, "kappa": kappa}
-
-
-#: Floor of the eigenvalues of :func:`positive_part`, relative to the largest one.
-POSITIVE_FLOOR = 1e-3
-
-
-def positive_part(inertia: np.ndarray, floor: float = POSITIVE_FLOOR) -> np.ndarray:
-    """``inertia`` with its eigenvalues raised to at least ``floor * lambda_max`` [kg m^2].
-
-    A box that is partly no rigid body (wide mass and CoM intervals with narrow inertias) can
-    give a lower bound ``M_L`` that is not positive definite at some ``q``. The implicit feedback
-    ``D (M_L + D T 1)^{-1} M_L r`` is then singular where ``D T = -lambda`` for a negative
-    eigenvalue ``lambda`` and changes sign beyond: the gain the adaptation reaches blows the law
-    up. On a mode the predicted inertia ``lambda_0`` only needs ``0 < lambda_0 <= lambda_true``
-    for the loop factor ``1 - lambda_0 / lambda_true`` to contract, so a small positive floor in
-    the directions where ``M_L`` fails is the cautious choice: the feedback there saturates at
-    ``lambda_0 / T`` instead of diverging (the certificate reports such a box as not certified).
-    """
-    eigenvalues, vectors = np.linalg.eigh(inertia)
-    top = float(eigenvalues[-1])
-    least = floor * top if top > 0 else floor
-    clamped = np.maximum(eigenvalues, least)
-    return (vectors * clamped) @ vectors.T
-
-
-def implicit_feedback(inertia: np.ndarray, gain: float, step: float, r: np.ndarray) -> np.ndarray:
-    """``D (M + D T 1)^{-1} M r`` [N m] with ``D = gain`` and ``D T = step``, by a general
-    solve (the fallback of the Cholesky path for an ``inertia`` made positive definite)."""
-    return gain * np.linalg.solve(inertia + step * np.eye(len(r)), inertia @ r)

@@ -16,7 +16,6 @@ import math
 import numpy as np
 
 from .cells import CellFloor
-from .interval import PHI_MAX_FACTOR
 
 
 class PeriodBound:
@@ -25,18 +24,16 @@ class PeriodBound:
     def __init__(self, cells: CellFloor):
         self.cells = cells
         self.controller = cells.controller
-        self.law_bounds = cells.law_bounds
         self.joints = cells.joints
         self.Kr = cells.Kr
         self.dof = cells.dof
 
     def gain(self, T: float) -> float:
-        """The gain ``D`` [N m s/rad] the argument counts on: the law's own ceiling (Theorem 2,
-        shared with the law, so it needs no bound of its own) or ``phi_P`` (Theorem 1)."""
+        """The gain ``D`` [N m s/rad] the argument counts on at period ``T``: the feedback law's
+        own ceiling at ``T`` (Theorem 2, shared with the law, so it needs no bound of its own) or
+        ``phi_P`` (Theorem 1)."""
         c = self.controller
-        if not c.adaptive:
-            return c.phi_P
-        return max(c.phi_P, PHI_MAX_FACTOR * self.law_bounds.max_upper_eigenvalue / T)
+        return c.gain_law.settled_phi(c.feedback.phi_ceiling(c.phi_P, T))
 
     def floor_at(
         self, T: float, d: float, quantities: dict, tube: float | None = None

@@ -59,7 +59,7 @@ def synthesize(
         sample_period: The control period [s] when the controller runs sampled (zero-order
             hold). ``None``: continuous time, the paper's law.
         sampled_law: With ``sample_period``: ``"implicit"`` (default), the sampled-data law of
-            :mod:`urpc.control.interval` that stays stable on every plant of the box and is
+            :mod:`urpc.control.feedback` that stays stable on every plant of the box and is
             certified by :func:`urpc.certify`; ``"paper"``, the paper's law unchanged (it can
             diverge on light plants at 0.5-1 kHz).
         delay: Samples between a state and the period its torque acts over: 0 (the ideal

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import copy
 import math
 from collections.abc import Callable, Sequence
 
@@ -10,6 +9,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
+from ...control.interval import IntervalPassivityController
 from ...errors import InputError
 from .robots import BENCHMARK_ROBOTS
 from .timing import time_calls
@@ -138,13 +138,22 @@ def _profile_robot(robot_name: str, repeats: int) -> dict[str, float]:
         "rnea": lambda: pin.rnea(robot.model, data, config, qd, qdd_a),
     }
     if controller.implicit:
-        # The private method is exactly what output() runs for the implicit law.
+        # The feedback law's torque is exactly what output() adds for the implicit law.
         # Not ``lower``: that name is the enclosure the arithmetic replica reads.
         lower_robot = controller.inertia_bounds.lower_robot
         lower_data = lower_robot.model.createData()
-        functions["sampled_law"] = lambda: controller._sampled_feedback(q, 1e3, r)
-        paper = copy.copy(controller)  # shares the bound method; only the law differs
-        paper.implicit = False
+        functions["sampled_law"] = lambda: controller.feedback.torque(q, 1e3, r)
+        paper = IntervalPassivityController(  # the same bound method and gains; the paper's law
+            bound,
+            controller.epsilon,
+            kappa_P=kappa_P,
+            kappa_I=kappa_I,
+            phi_P=phi_P,
+            phi_I=phi_I,
+            Kr=Kr,
+            sample_period=controller.sample_period,
+            sampled_law="paper",
+        )
         functions["output_paper_law"] = lambda: paper.output(*args)
         step, stride = 1e3 * controller.sample_period, len(q) + 1
 

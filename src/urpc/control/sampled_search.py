@@ -1,0 +1,150 @@
+"""The search of the implicit law's certificate: the floor as a fixed point over tubes of the
+tracking error, the basin the floor is reached from, and the largest certified sample period
+(docs/sampled-data.md §2-3), each evaluation a :class:`~urpc.control.period_bound.PeriodBound` over
+the cells' enclosures (:class:`~urpc.control.cells.CellFloor`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+from .cells import CellFloor
+from .certificate_report import lightest_joint
+from .interval import IntervalPassivityController
+from .period_bound import PeriodBound
+
+
+class SampledSearch:
+    """The floor of the implicit law as a fixed point over tubes, and the largest period.
+
+    Every evaluation bounds the quantities over the tube ``||e|| <= rho``, ``||r|| <= r_max``; a
+    tube with ``floor(rho) <= rho`` and ``r_sup <= r_max`` is invariant once the gains have
+    saturated, and the error ends up below ``floor(rho)``. The cells are widened by
+    ``2 T``, so that the same enclosures serve every period up to ``2 T``."""
+
+    def __init__(
+        self,
+        floor_of: CellFloor,
+        controller: IntervalPassivityController,
+        d: float,
+        progress: Callable[[str], Any] | None = None,
+    ):
+        self.floor_of, self.controller, self.d = floor_of, controller, d
+        self.bound = PeriodBound(floor_of)
+        self.say = progress or (lambda message: None)
+        self.T = controller.sample_period
+        self.extension = 2.0 * self.T
+        self.epsilon = controller.epsilon
+
+    def enclose(self, tube: float, T: float | None = None) -> dict:
+        """The cell quantities over the tube ``||e|| <= tube`` with ``||r|| <= r_max``, raising
+        ``r_max`` until the bound of ``||r||`` at the least self-consistent tube lies inside it."""
+        T = self.T if T is None else T
+        r_max = 1.5 * float(self.controller.Kr.max()) * tube + 1e-6
+        for _ in range(5):
+            cells = self.floor_of.cells
+            self.say(f"enclosing {cells} cells (||e|| <= {tube:.3g}, ||r|| <= {r_max:.3g})")
+            quantities = self.floor_of.quantities(tube, r_max, self.extension)
+            floor, parts, _ = self.least_tube(quantities, T)
+            if not math.isfinite(floor) or parts["r_sup"] <= r_max:
+                return quantities
+            r_max = 1.25 * parts["r_sup"]
+        return quantities
+
+    def least_tube(self, quantities: dict, T: float) -> tuple[float, dict, float]:
+        """The least ``rho <= tube`` with ``floor(rho) <= rho`` (the fixed point reached from
+        ``rho = 0``, each quantity bounded over the enclosing tube), its floor and parts."""
+        top = quantities["tube"]
+        rho, floor, parts = 0.0, math.inf, {}
+        for _ in range(60):
+            floor, parts = self.bound.floor_at(T, self.d, quantities, rho)
+            if not math.isfinite(floor) or floor > top:
+                return math.inf, parts, rho
+            if floor <= rho:
+                return floor, parts, rho
+            rho = min(top, max(floor * 1.0005, rho * 1.0005))
+        return math.inf, parts, rho
+
+    def basin(self, quantities: dict, least: float) -> float:
+        """The largest tube ``rho`` in ``[least, tube]`` (scanned down by 10 %) that maps into
+        itself with ``||r||`` inside the enclosure: the states from which the floor is reached
+        once the gains have saturated."""
+        rho = quantities["tube"]
+        self.say(f"scanning the basin (||e|| <= {rho:.3g})")
+        while rho > max(least, 1e-6 * quantities["tube"]):
+            floor, parts = self.bound.floor_at(self.T, self.d, quantities, rho)
+            if floor <= rho and parts.get("r_sup", math.inf) <= quantities["r_max"]:
+                return rho
+            rho *= 0.9
+        return least
+
+    def floor(self) -> tuple[float, dict, dict]:
+        """The floor: within the tube ``||e|| <= epsilon`` if there is one, else in wider tubes
+        (up to ``10 epsilon``) for the report; ``inf`` beyond."""
+        tube = self.epsilon
+        if not math.isfinite(self.d):
+            quantities = self.floor_of.quantities(tube, 0.0, self.extension)
+            return math.inf, {"margin": -math.inf}, quantities
+        while True:
+            quantities = self.enclose(tube)
+            floor, parts, rho = self.least_tube(quantities, self.T)
+            if math.isfinite(floor) and parts["r_sup"] <= quantities["r_max"]:
+                basin = self.basin(quantities, rho)
+                parts.update(tube=rho, r_max=quantities["r_max"], basin_tube=basin)
+                return floor, parts, quantities
+            if tube >= 10.0 * self.epsilon:
+                break
+            tube *= 10.0
+        quantities = self.enclose(self.epsilon)
+        _, parts = self.bound.floor_at(self.T, self.d, quantities)
+        parts.update(tube=self.epsilon, r_max=quantities["r_max"])
+        return math.inf, parts, quantities
+
+    def max_sample_period(self) -> float:
+        """The largest ``T <= 2 T_controller`` with a floor below ``epsilon`` in the tube
+        ``||e|| <= epsilon`` (the cells' enclosures hold for every period up to ``2 T``)."""
+        quantities = self.enclose(self.epsilon)  # cached from floor()
+        self.say("searching the largest sample period")
+
+        def ok(T: float) -> bool:
+            floor, parts, _ = self.least_tube(quantities, T)
+            return floor <= self.epsilon and parts.get("r_sup", math.inf) <= quantities["r_max"]
+
+        low, high = self.extension * 1e-4, self.extension
+        if not ok(low):
+            return 0.0
+        if ok(high):
+            return high
+        for _ in range(40):
+            middle = math.sqrt(low * high)
+            low, high = (middle, high) if ok(middle) else (low, middle)
+            if high / low < 1.005:
+                break
+        return low
+
+    def report(self, floor: float, parts: dict, quantities: dict) -> dict[str, Any]:
+        """What dominates the floor, where, and what would certify (``quantities``: the
+        enclosures the floor was found with)."""
+        floor_of = self.floor_of
+        shares = parts.get("shares") or {}
+        out: dict[str, Any] = {}
+        if "invalid_cell" in parts:
+            out["invalid_time"] = floor_of.cell_time(parts["invalid_cell"])[0]
+        if shares:
+            dominant = max(shares, key=shares.get)
+            total = sum(shares.values()) or 1.0
+            out["dominant_term"] = dominant
+            out["term_shares"] = {k: v / total for k, v in shares.items()}
+            cell = parts.get("slow_cell", 0)
+            out["worst_time"] = floor_of.cell_time(cell)[0]
+            lightest = lightest_joint(floor_of, quantities, cell)
+            out["lightest_joint"] = floor_of.robot.joint_names[lightest]
+            link = floor_of.dominant_link(
+                quantities, parts.get("piece", 0), cell, parts.get("tube", self.epsilon)
+            )
+            if link is not None:
+                out["dominant_link"], out["dominant_link_share"] = link
+        out.update(self.controller.gain_law.saturation_figures())
+        return out
