@@ -276,6 +276,24 @@ def test_cli_reports_a_delayed_run_as_not_certified(capsys):
     assert code == 0 and "1000 Hz zero-order hold, actuation delay 1 sample," in out
 
 
+def test_cli_delayed_law_runs_behind_its_delay_unless_told(capsys):
+    """``--delay 1`` (the law) brings its one-sample actuation delay with it, the same run as
+    in process; ``--actuation-delay 0`` runs the mismatch."""
+    run = ("simulate", "rr_planar/s3_ic1", "--sampled-law", "implicit", "--duration", "0.3")
+    code, out, _ = _cli(capsys, *run, "--delay", "1", "--json")
+    summary = json.loads(out)
+    assert code == 0 and summary["actuation_delay"] == 1 and summary["certified"] is False
+    assert "one-sample-delay law" in summary["not_certified"]
+    scenario = load_scenario("rr_planar/s3_ic1").with_overrides(
+        duration=0.3, controller_options={"interval": {"sampled_law": "implicit", "delay": 1}}
+    )
+    assert summary["final_error"] == run_scenario(scenario).metrics["final_error"]
+    code, out, _ = _cli(capsys, *run, "--delay", "1", "--actuation-delay", "0", "--json")
+    mismatch = json.loads(out)
+    assert code == 0 and mismatch["actuation_delay"] == 0
+    assert mismatch["final_error"] != summary["final_error"]
+
+
 @pytest.mark.parametrize(
     ("flags", "says"),
     [
