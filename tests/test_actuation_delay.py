@@ -1,7 +1,8 @@
 """The sampled simulation's actuation delay (``simulate(..., actuation_delay=d)``).
 
-References: the delayed loop written out period by period on the textbook RR model (DOP853, no
-Pinocchio); an open-loop replay of a logged run's commands, shifted by ``d``, on a fresh plant;
+References (the delayed loop written out period by period on the textbook RR model, DOP853 and
+no Pinocchio, is ``test_simulation.test_zero_order_hold_feedback_and_disturbance_reach_the_plant``):
+an open-loop replay of a logged run's commands, shifted by ``d``, on a fresh plant;
 the delayed integrator recursion ``v_{k+1} = v_k - a v_{k-d}`` of a pure inertia under velocity
 feedback, whose stability limit is ``a < 2 sin(pi / (2 (2 d + 1)))`` (2, 1, 0.618 for d = 0, 1,
 2); the virtual robot's own one-sample delay in lock step; the certificate's delay condition.
@@ -15,8 +16,6 @@ import math
 import numpy as np
 import pytest
 import yaml
-from scipy.integrate import solve_ivp
-from test_simulation import PaperTrajectory, PDPlusGravity, at, textbook_rhs
 
 import urpc
 from urpc.__main__ import main
@@ -38,44 +37,13 @@ def true_plant(rr, rr_box, rr_true_point):
     return rr_box.plant(rr, rr_true_point)
 
 
-def applied(torque: np.ndarray, delay: int, limit=None) -> np.ndarray:
-    """What the plant holds over each period: the command of ``delay`` samples earlier, clipped,
-    and zero before the first one."""
-    held = torque if limit is None else np.clip(torque, -limit, limit)
-    return np.concatenate((np.zeros((delay, torque.shape[1])), held[: len(held) - delay]))
+def applied(torque: np.ndarray, delay: int) -> np.ndarray:
+    """What the plant holds over each period (no torque limit): the command of ``delay`` samples
+    earlier, and zero before the first one."""
+    return np.concatenate((np.zeros((delay, torque.shape[1])), torque[: len(torque) - delay]))
 
 
 # ----------------------------------------------------------------------------- the delayed hold
-@pytest.mark.parametrize("delay", [1, 3])
-def test_delayed_loop_matches_the_loop_written_out_on_the_textbook_model(true_plant, delay):
-    """PD plus gravity at 5 ms with a disturbance and a torque limit: the command is computed
-    from the sample, clipped, and acts ``delay`` periods later (zero before); the disturbance is
-    not delayed."""
-    period, limit = 5e-3, np.array([150.0, 60.0])
-    controller, trajectory = at(period, PDPlusGravity()), PaperTrajectory()
-    result = simulate(
-        true_plant, controller, trajectory, duration=0.3, q0=[0.05, 0.0], qd0=[0.0, 0.0],
-        disturbance_bound=10.0, seed=11, torque_limit=limit, actuation_delay=delay,
-    )  # fmt: skip
-    assert result.info["actuation_delay"] == delay
-    assert result.saturated_samples > 0  # the limit acts, so the order clip-then-delay matters
-    x = np.array([0.05, 0.0, 0.0, 0.0])
-    in_flight = [np.zeros(2)] * delay
-    for k, t in enumerate(result.t):
-        np.testing.assert_allclose(result.q[k], x[:2], atol=1e-9)
-        np.testing.assert_allclose(result.qd[k], x[2:], atol=1e-8)
-        u = controller.output(t, x[:2], x[2:], trajectory.reference(t), np.zeros(0))
-        np.testing.assert_allclose(result.torque[k], u, rtol=1e-7, atol=1e-6)
-        if k == len(result.t) - 1:
-            break
-        in_flight.append(np.clip(u, -limit, limit))
-        held = in_flight.pop(0) + result.disturbance[k]
-        step = solve_ivp(
-            textbook_rhs(held), (t, t + period), x, method="DOP853", rtol=1e-12, atol=1e-12
-        )
-        x = step.y[:, -1]
-
-
 @pytest.mark.parametrize("delay", [0, 1, 2])
 def test_a_logged_run_replays_from_its_commands_shifted_by_the_delay(rr, rr_box, true_plant, delay):
     """The interval law at 1 kHz: a fresh plant stepped open loop with the logged commands shifted
