@@ -24,7 +24,7 @@ from urpc.studies.scenario import build, load_scenario, run_scenario, sample_tru
 
 SUMMARY_KEYS = {  # "phi", "kappa": the interval law's diagnostics
     *METRIC_NAMES, "phi", "kappa", "epsilon", "controller", "scenario", "plant", "true_parameters",
-    "certified", "not_certified", "certificate", "final_error_window",
+    "certified", "not_certified", "certificate", "final_error_window", "actuation_delay",
 }  # fmt: skip
 TIMINGS = ("step_time_median", "wall_time")
 

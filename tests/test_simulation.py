@@ -126,9 +126,12 @@ def test_open_loop_plant_follows_the_textbook_true_dynamics(true_plant, sample_p
     np.testing.assert_allclose(result.qd, reference.y[2:].T, atol=10 * tolerance)
 
 
-def test_zero_order_hold_feedback_and_disturbance_reach_the_plant(true_plant):
-    """Sampled run: u is computed from the sampled state, held, and the plant sees u + d_k.
-    Reference: the same loop written out, each period integrated by DOP853 on the textbook model."""
+@pytest.mark.parametrize(("delay", "limit"), [(0, None), (1, [150.0, 60.0]), (3, [150.0, 60.0])])
+def test_zero_order_hold_feedback_and_disturbance_reach_the_plant(true_plant, delay, limit):
+    """Sampled run: u is computed from the sampled state, clipped to the torque limit, held
+    (``delay`` periods later, zero before: the actuation delay), and the plant sees it plus
+    d_k (not delayed). Reference: the same loop written out, each period integrated by DOP853 on
+    the textbook model."""
     period, duration = 5e-3, 0.3
     controller, trajectory = at(period, PDPlusGravity()), PaperTrajectory()
     result = simulate(
@@ -140,9 +143,16 @@ def test_zero_order_hold_feedback_and_disturbance_reach_the_plant(true_plant):
         qd0=[0.0, 0.0],
         disturbance_bound=10.0,
         seed=11,
+        torque_limit=limit,
+        actuation_delay=delay,
     )
     assert np.all(np.linalg.norm(result.disturbance, axis=1) <= 10.0)
+    assert result.info["actuation_delay"] == delay
+    if limit is not None:  # the limit acts, so the order clip-then-delay matters
+        assert result.saturated_samples > 0
+    bound = np.inf if limit is None else np.array(limit)
     x = np.array([0.05, 0.0, 0.0, 0.0])
+    in_flight = [np.zeros(2)] * delay
     for k, t in enumerate(result.t):
         np.testing.assert_allclose(result.q[k], x[:2], atol=1e-9)
         np.testing.assert_allclose(result.qd[k], x[2:], atol=1e-8)
@@ -150,8 +160,9 @@ def test_zero_order_hold_feedback_and_disturbance_reach_the_plant(true_plant):
         np.testing.assert_allclose(result.torque[k], u, rtol=1e-7, atol=1e-6)
         if k == len(result.t) - 1:
             break
+        in_flight.append(np.clip(u, -bound, bound))
         step = solve_ivp(
-            textbook_rhs(u + result.disturbance[k]),
+            textbook_rhs(in_flight.pop(0) + result.disturbance[k]),
             (t, t + period),
             x,
             method="DOP853",

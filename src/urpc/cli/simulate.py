@@ -20,6 +20,7 @@ from .common import (
     joint_units,
     json_text,
     names,
+    non_negative_int,
     output_folder,
     positive_float,
     positive_int,
@@ -113,6 +114,13 @@ def add_scenario_arguments(p, simulate: bool = True) -> None:
         "certify) or paper (the paper's law unchanged; it can diverge on light plants at "
         "0.5-1 kHz)",
     )
+    run.add_argument(
+        "--delay",
+        type=int,
+        choices=(0, 1),
+        help="samples of actuation delay the interval law predicts over (1: it predicts one "
+        "period ahead; docs/robot.md); default: the scenario's",
+    )
     run.add_argument("--epsilon", metavar="E", help="required precision ||q_d - q|| < E [rad]")
     timing = run.add_mutually_exclusive_group()
     timing.add_argument("--sample-period", metavar="T", help="control period [s] (zero-order hold)")
@@ -123,6 +131,16 @@ def add_scenario_arguments(p, simulate: bool = True) -> None:
         help="bound on ||d|| [N m], drawn per sample, unknown to the controller",
     )
     run.add_argument("--duration", metavar="S", help="simulated time [s]")
+    run.add_argument(
+        "--actuation-delay",
+        type=non_negative_int,
+        metavar="N",
+        help="samples between a state and the period its torque acts over on the plant, as on "
+        "a real torque interface (1: the torque computed at t_k acts from t_k + T; zero torque "
+        "until the first one arrives); sampled runs only; default: the scenario's "
+        "actuation_delay, else the law's own delay (--delay, else 0). The certificate covers "
+        "no delay: a configuration with one is not certified",
+    )
     if not simulate:
         p.set_defaults(true_params=None, controller=None, plant=None, seed=None, torque_limit=None)
         return
@@ -178,6 +196,7 @@ def run_simulate(args) -> int:
         "final_error_window": describe_final_window(result.duration),
         "scenario": scenario.name,
         "plant": result.info["plant"],
+        "actuation_delay": result.info["actuation_delay"],
         "true_parameters": {
             "description": setup.true_description,
             "values": result.info["true_parameters"],
@@ -254,7 +273,7 @@ def scenario_from_arguments(args):
     torque_limit = args.torque_limit
     if torque_limit is not None and "," in torque_limit:
         torque_limit = names(torque_limit)
-    interval = {"method": args.method, "sampled_law": args.sampled_law}
+    interval = {"method": args.method, "sampled_law": args.sampled_law, "delay": args.delay}
     interval = {key: value for key, value in interval.items() if value is not None}
     options = {"interval": interval} if interval else None
     return scenario.with_overrides(
@@ -271,6 +290,7 @@ def scenario_from_arguments(args):
         duration=args.duration,
         seed=args.seed,
         torque_limit=torque_limit,
+        actuation_delay=args.actuation_delay,
     )
 
 
@@ -285,6 +305,9 @@ def _print_summary(
         timing = "continuous time"
     else:
         timing = f"{1.0 / result.sample_period:g} Hz zero-order hold"
+        delay = result.info["actuation_delay"]
+        if delay:
+            timing += f", actuation delay {count(delay, 'sample')}"
     if result.disturbance_bound > 0:
         known = setup.box.disturbance_bound is not None
         timing += (

@@ -13,17 +13,19 @@ period is stated once, at synthesis.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from ..errors import InputError
 from ..trajectories import Reference
 from ..validation import positive_number
+from ..wording import count
 
 if TYPE_CHECKING:
     from ..model.robot import Robot
 
-__all__ = ["Controller", "Reference", "sample_period_of"]
+__all__ = ["Controller", "Reference", "actuation_delay_of", "sample_period_of"]
 
 
 class Controller(ABC):
@@ -103,3 +105,36 @@ def sample_period_of(value: float | None) -> float | None:
     if value is None:
         return None
     return positive_number("sample_period", value, "a finite number > 0 [s] or None")
+
+
+def actuation_delay_of(controller: Controller, value: Any = None) -> int:
+    """The actuation delay [samples] with which a plant applies ``controller``'s torques: the
+    torque computed from the sample at ``t_k`` acts over ``[t_{k+d}, t_{k+d+1})``.
+
+    ``value`` is checked: an integer >= 0 (an integral float such as ``1.0`` too). ``None`` gives
+    the delay the law itself predicts over (``controller.delay``: 1 for
+    :class:`~urpc.control.delay.DelayedIntervalController`, 0 for every other law), so that a
+    delayed law meets the delay it was built for unless told otherwise. A continuous-time
+    controller (``sample_period`` ``None``) has no samples to count: only 0.
+
+    Raises:
+        InputError: not an integer >= 0, or a delay of a continuous-time run (field
+            ``actuation_delay``).
+    """
+    if value is None:
+        return int(getattr(controller, "delay", 0))
+    if isinstance(value, float) and value.is_integer():
+        value = int(value)
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
+        raise InputError(
+            f"{value!r} is not a number of samples; expected an integer >= 0 (0: a torque acts "
+            "over the period of its sample, 1: over the next one)",
+            field="actuation_delay",
+        )
+    if value > 0 and controller.sample_period is None:
+        raise InputError(
+            f"a delay of {count(value, 'sample')} needs samples: the controller runs in "
+            "continuous time; synthesize it with a sample_period, or give 0",
+            field="actuation_delay",
+        )
+    return int(value)

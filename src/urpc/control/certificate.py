@@ -35,7 +35,9 @@ import numpy as np
 from ..errors import InputError
 from ..jsonsafe import jsonable, non_finite_paths, restore_non_finite
 from ..trajectories import Trajectory
+from ..wording import count
 from .argument import Condition
+from .base import actuation_delay_of
 from .cells import CellFloor
 from .interval import IntervalPassivityController
 
@@ -47,7 +49,9 @@ from .interval import IntervalPassivityController
 #: a default): the certificate cache (:mod:`urpc.control.certificate_cache`) keys every record on
 #: it, so that no certificate of an older argument is ever reused. (The key also holds urpc's
 #: version and a digest of its source.)
-CERTIFICATE_VERSION = 3
+CERTIFICATE_VERSION = 3  # 3: the laws' own arguments; the plant's actuation delay
+#: The condition a delayed torque fails (the law's delay or the plant's actuation delay).
+DELAY_CONDITION = "actuation delay counted by the argument"
 
 
 @dataclass(frozen=True)
@@ -136,6 +140,7 @@ def certify(
     duration: float,
     disturbance_bound: float | None = None,
     cells: int | None = None,
+    actuation_delay: int | None = None,
     progress: Callable[[str], Any] | None = None,
 ) -> Certificate:
     """The certificate of ``controller`` tracking ``trajectory`` over ``[0, duration]`` [s].
@@ -151,20 +156,34 @@ def certify(
         disturbance_bound: ``||d||`` bound [N m] the plant sees. Theorem 2 does not need it in
             continuous time, but the sampled-data floor does; defaults to the box's bound.
         cells: Number of cells of time (default: chosen from the reference's speed).
+        actuation_delay: Samples between a state and the period its torque acts over on the
+            plant (:func:`urpc.simulate`'s ``actuation_delay``); ``None``: the delay the law
+            predicts over (``controller.delay``). The argument covers a torque that acts over
+            the period of its own sample: any delay, the law's or the plant's, fails the
+            condition "actuation delay counted by the argument" (the floor and the largest
+            period are still reported: they are the undelayed loop's).
         progress: Called with one short line as each stage of the sampled-data search starts
             (``"enclosing 236 cells (||e|| <= 0.01, ||r|| <= 0.45)"``), or ``None``.
     """
     box = controller.bound.box
     d = box.disturbance_bound if disturbance_bound is None else float(disturbance_bound)
     conditions = controller.gain_law.conditions()
-    delay = int(getattr(controller, "delay", 0))
+    law_delay = int(getattr(controller, "delay", 0))
+    delay = max(law_delay, actuation_delay_of(controller, actuation_delay))
     if delay:  # the argument of docs/sampled-data.md §2 is for a torque acting at its sample
+        late = count(delay, "sample")
+        why = (
+            "the one-sample-delay law (delay: 1) predicts with the nominal model, whose error "
+            "the argument does not bound yet"
+            if law_delay
+            else f"this plant applies each torque {late} later (actuation_delay), which the "
+            "undelayed law does not predict"
+        )
         conditions.append(
             Condition(
-                "actuation delay counted by the argument", False, float(delay), 0.0,
-                "the certificate covers a torque that acts over the period of its sample; the "
-                "one-sample-delay law (delay: 1) predicts with the nominal model, whose error "
-                "the argument does not bound yet: certify the configuration without delay",
+                DELAY_CONDITION, False, float(delay), 0.0,
+                f"the certificate covers a torque that acts over the period of its sample; {why}:"
+                " certify the configuration without delay",
             )
         )  # fmt: skip
     floor_of = CellFloor(controller, trajectory, duration, cells=cells)
@@ -181,6 +200,18 @@ def certify(
         note = law.advice(controller, argument)
         if note is not None:
             figures["advice"] = note
+        if delay:  # no period or epsilon makes up for a delay the argument does not count
+            others = [c for c in conditions if c.name != DELAY_CONDITION]
+            undelayed = all(c.holds for c in others) and floor <= controller.epsilon
+            figures["advice"] = (
+                f"no period or epsilon certifies a torque acting {late} late: the argument "
+                "covers a torque acting over the period of its sample; without the "
+                + (
+                    "delay this configuration is certified" if undelayed
+                    else f"delay: {note}" if note is not None
+                    else "delay it is not certified either"
+                )
+            )  # fmt: skip
     ordered = tuple(sorted(conditions, key=lambda c: c.holds))
     return Certificate(
         bool(holds), controller.epsilon, float(floor), float(argument.max_sample_period),

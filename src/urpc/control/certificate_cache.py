@@ -209,6 +209,7 @@ def cached_certify(
     duration: float,
     disturbance_bound: float | None = None,
     cells: int | None = None,
+    actuation_delay: int | None = None,
     progress: Callable[[str], Any] | None = None,
     cache: bool | CertificateCache = True,
     refresh: bool = False,
@@ -217,7 +218,8 @@ def cached_certify(
     ``cache`` when it holds this configuration's key, else computed and stored.
 
     Args:
-        controller, trajectory, duration, disturbance_bound, cells, progress: As for
+        controller, trajectory, duration, disturbance_bound, cells, actuation_delay,
+            progress: As for
             :func:`~urpc.control.certificate.certify`.
         cache: ``True`` for the default folder (:func:`default_directory`), a
             :class:`CertificateCache`, or ``False``: computed, nothing read or written.
@@ -227,7 +229,12 @@ def cached_certify(
         InputError: as :func:`~urpc.control.certificate.certify` (a bad reference); never for
             the cache itself.
     """
-    arguments = {"duration": duration, "disturbance_bound": disturbance_bound, "cells": cells}
+    arguments = {
+        "duration": duration,
+        "disturbance_bound": disturbance_bound,
+        "cells": cells,
+        "actuation_delay": actuation_delay,
+    }
     store = None
     if cache is True:
         store = CertificateCache()

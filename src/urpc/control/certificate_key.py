@@ -16,7 +16,8 @@ The key hashes one canonical document of:
   ``kappa_P``, ``kappa_I``, ``phi_P``, ``phi_I``, the ceiling ``phi_max``), the bound method, and
   the inertia bounds of the implicit law (their two model copies, scale and eigenvalue ceiling);
 * **the reference**: its class and :meth:`~urpc.trajectories.Trajectory.fingerprint`;
-* the **duration**, the **disturbance bound** and the number of **cells** asked for.
+* the **duration**, the **disturbance bound**, the number of **cells** asked for and the
+  plant's **actuation delay** (resolved: ``None`` counts as the law's own delay).
 
 Floats enter by their exact bits (``float.hex``), arrays by dtype, shape and a sha256 of their
 bytes. A reference whose class gives no fingerprint (the base class's ``None``, or one inherited
@@ -56,9 +57,10 @@ def certificate_key(
     duration: float,
     disturbance_bound: float | None = None,
     cells: int | None = None,
+    actuation_delay: int | None = None,
 ) -> str:
     """The sha256 (64 hex digits) of everything ``certify(controller, trajectory, duration=...,
-    disturbance_bound=..., cells=...)`` depends on (module docstring).
+    disturbance_bound=..., cells=..., actuation_delay=...)`` depends on (module docstring).
 
     Raises:
         NoKey: the reference gives no fingerprint.
@@ -69,6 +71,7 @@ def certificate_key(
         duration=duration,
         disturbance_bound=disturbance_bound,
         cells=cells,
+        actuation_delay=actuation_delay,
     )
     text = json.dumps(document, sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(text.encode()).hexdigest()
@@ -81,6 +84,7 @@ def key_document(
     duration: float,
     disturbance_bound: float | None = None,
     cells: int | None = None,
+    actuation_delay: int | None = None,
 ) -> dict[str, Any]:
     """The canonical document :func:`certificate_key` hashes (JSON data, module docstring).
 
@@ -88,6 +92,7 @@ def key_document(
         NoKey: the reference gives no fingerprint.
     """
     from .. import __version__
+    from .base import actuation_delay_of
     from .certificate import CERTIFICATE_VERSION
 
     bound = controller.bound
@@ -135,6 +140,7 @@ def key_document(
         if disturbance_bound is None
         else canonical(float(disturbance_bound)),
         "cells": None if cells is None else int(cells),
+        "actuation_delay": actuation_delay_of(controller, actuation_delay),
     }
 
 

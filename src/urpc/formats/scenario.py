@@ -382,3 +382,9 @@ class ScenarioFile(FileFormat):
         array=Annotated[Vector, AfterValidator(_all_positive)],
     ) = Field(None, description="per-joint torque bound [N m]: a number or one per joint")
     plant: PlantBackend = Field("pinocchio", description="pinocchio, or mujoco (sampled runs)")
+    actuation_delay: Count | None = Field(
+        None,
+        description="samples between a state and the period its torque acts over on the plant "
+        "(sampled runs); default: the interval law's delay (controller_options.interval.delay), "
+        "else 0",
+    )

@@ -42,7 +42,9 @@ class SimulationResult:
         q, qd: Joint positions [rad] and velocities [rad/s] of the plant, ``(K, n)``.
         q_desired, qd_desired: The reference position [rad] and velocity [rad/s], ``(K, n)``.
         torque: Commanded torque ``u`` [N m] (the controller's output, before any torque limit),
-            ``(K, n)``; held over the following sample period in a sampled run.
+            ``(K, n)``; held over the following sample period in a sampled run, or over the
+            period ``d`` samples later with an actuation delay of ``d`` samples
+            (``info["actuation_delay"]``; zero torque before the first command arrives).
         disturbance: Input disturbance ``d`` [N m] added at the plant input, ``(K, n)``.
         saturated: True where the torque limit clipped the command, ``(K,)``.
         diagnostics: The controller's named diagnostic series (``Controller.diagnostics``),

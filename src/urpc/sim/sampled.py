@@ -1,11 +1,19 @@
 """The sampled closed loop: the controller's output held (zero-order hold) over each period with a
 disturbance (drawn in a ball, or of constant magnitude against the sliding variable ``r``), the
-plant integrated by RK4 over the period."""
+plant integrated by RK4 over the period.
+
+With an actuation delay of ``d`` samples the torque computed from the sample at ``t_k`` (clipped
+to the torque limit, as a robot's safety layer clips it before sending) is held over
+``[t_{k+d}, t_{k+d+1})`` instead; over the first ``d`` periods the plant holds a zero torque (no
+command has arrived yet, as on :class:`urpc.robot.virtual.VirtualArm` and in the delayed law's
+``u_{-1} = 0``). The disturbance ``d_k`` is the plant's own and is not delayed.
+"""
 
 from __future__ import annotations
 
 import math
 import time
+from collections import deque
 from typing import Any
 
 import numpy as np
@@ -29,11 +37,14 @@ def run_sampled(
     disturbance_bound: float,
     seed: int,
     disturbance_model: str = "ball",
+    delay: int = 0,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """The series (keyword arguments of :class:`~urpc.sim.results.SimulationResult`) and the
     ``info`` of a run sampled at the controller's own period (``controller.sample_period`` [s])
     on ``stepper``, with the disturbance ``disturbance_model`` (one of :data:`DISTURBANCES`) of
-    magnitude ``disturbance_bound`` [N m]."""
+    magnitude ``disturbance_bound`` [N m] and an actuation delay of ``delay`` samples (an
+    integer >= 0, checked by the caller; module docstring). The ``torque`` series is the
+    command at each sample, before the limit and the delay."""
     controller, trajectory = setup.controller, setup.trajectory
     period = controller.sample_period
     q, qd, limit, bar = setup.q0, setup.qd0, setup.limit, setup.bar
@@ -68,6 +79,7 @@ def run_sampled(
     report_every = max(1, samples // 200)
     bound = setup.max_state**2
     clock = time.perf_counter
+    in_flight = deque(np.zeros(n) for _ in range(delay))  # sent, not yet acting: oldest first
     for k in range(samples):
         t = t_series[k]
         reference = trajectory.reference(t)
@@ -98,6 +110,9 @@ def run_sampled(
             clipped = np.clip(u, -limit, limit)
             saturated[k] = np.any(clipped != u)
             u = clipped
+        if delay:
+            in_flight.append(np.array(u))
+            u = in_flight.popleft()
         try:
             q, qd = stepper.step(u + disturbance[k], period)
         except SimulationError:

@@ -21,6 +21,15 @@ the period is never given a second time here.
   RK4 with ``1e-4`` s steps is accurate to far below the tracking tolerances
   (``tests/test_simulation.py`` compares it with ten times finer steps). The controller's state
   advances once per sample (:meth:`Controller.advance`).
+* **Actuation delay** (``actuation_delay``, sampled runs): a whole number ``d`` of samples
+  between a state and the period its torque acts over, as on a real torque interface (most apply
+  the torque answering ``t_k`` at ``t_{k+1}``: ``d = 1``). The command computed at ``t_k`` acts
+  over ``[t_{k+d}, t_{k+d+1})``; before the first command arrives (the first ``d`` periods) the
+  plant holds a zero torque. Counted in samples, like the delayed law
+  (:mod:`urpc.control.delay`) and the virtual robot: a delay that is not a multiple of the period
+  would switch the torque inside a period, which a zero-order hold does not model. The default is
+  the delay the law predicts over (``controller.delay``: 0, or 1 for the delayed law).
+  ``urpc.certify``'s argument covers no delay (docs/sampled-data.md §3).
 
 A run that diverges (a non-finite value, ``|q|`` or ``|qd|`` above ``max_state``, a solver failure)
 raises :class:`~urpc.errors.SimulationError` naming the time and the state.
@@ -35,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from ..control.base import Controller
+from ..control.base import Controller, actuation_delay_of
 from ..errors import InputError
 from ..model.robot import Robot
 from ..trajectories import PaperTrajectory, Trajectory
@@ -72,6 +81,7 @@ def simulate(
     progress: bool | Callable[[float], Any] | Any | None = None,
     plant_backend: str = "pinocchio",
     controller_state0: np.ndarray | None = None,
+    actuation_delay: int | None = None,
 ) -> SimulationResult:
     """Simulate ``plant`` under ``controller`` tracking ``trajectory``.
 
@@ -110,6 +120,11 @@ def simulate(
         controller_state0: The controller's internal state at ``t = 0`` (length
             ``controller.n_states``), e.g. to continue a run after a tool change; ``None`` uses
             ``controller.initial_state()``.
+        actuation_delay: Samples between a state and the period its torque acts over (an
+            integer >= 0; module docstring): the command of the sample at ``t_k`` is held over
+            ``[t_{k+d}, t_{k+d+1})``, a zero torque over the first ``d`` periods. ``None``: the
+            delay the law predicts over (``controller.delay``, 0 for an undelayed law). Recorded
+            as ``info["actuation_delay"]``; a delay > 0 needs a sampled controller.
 
     Raises:
         InputError: an argument out of range (the message names it).
@@ -117,6 +132,7 @@ def simulate(
     """
     start = time.perf_counter()
     _check_parts(plant, controller, trajectory)
+    delay = actuation_delay_of(controller, actuation_delay)
     n = plant.dof
     reference0 = trajectory.reference(0.0)
     q0 = finite_vector("q0", reference0.q if q0 is None else q0, n)
@@ -196,10 +212,13 @@ def simulate(
                 )
             step = positive_number("integration_step", integration_step, "a finite number > 0 [s]")
             stepper = make_plant(plant_backend, plant, max_step=step)
-            series, info = run_sampled(setup, stepper, disturbance_bound, int(seed), disturbance)
+            series, info = run_sampled(
+                setup, stepper, disturbance_bound, int(seed), disturbance, delay
+            )
             duration = float(series["t"][-1])
     finally:
         bar.close()
+    info["actuation_delay"] = delay
     # The robot, so that the result can be replayed later (SimulationResult.replay).
     info["robot"] = {
         "name": plant.name,

@@ -97,6 +97,7 @@ def cached_setup(
             setup.trajectory,
             duration=scenario.duration,
             disturbance_bound=scenario.disturbance,
+            actuation_delay=scenario.actuation_delay,
             progress=report.stage if report.active else None,
             cache=cache,
             refresh=refresh,

@@ -129,6 +129,7 @@ def simulate_setup(
         plant_description=setup.true_description,
         progress=progress,
         plant_backend=scenario.plant,
+        actuation_delay=scenario.actuation_delay,
     )
     info = {
         **result.info,

@@ -20,6 +20,7 @@ from ...errors import InputError, did_you_mean
 from ...formats import scenario as schema
 from ...formats.base import read_yaml, validate
 from ...model.catalog import builtin_root
+from ...wording import count
 
 #: Controllers a scenario can run.
 CONTROLLERS: tuple[str, ...] = names.CONTROLLERS
@@ -93,6 +94,9 @@ class Scenario:
         torque_limit: Per-joint torque bound [N m] (a number or one per joint); ``None``: none.
         plant: Backend simulating the true plant (one of :data:`PLANT_BACKENDS`); ``mujoco``
             needs a sampled run.
+        actuation_delay: Samples between a state and the period its torque acts over on the
+            plant (:func:`urpc.simulate`'s ``actuation_delay``); ``None``: the delay the law
+            predicts over (the interval law's ``delay`` option, else 0).
         locked_joints: Joints removed from the model: names (locked at 0) or name -> position.
         description: Free text.
         source: The file the scenario was read from.
@@ -117,6 +121,7 @@ class Scenario:
     seed: int = 0
     torque_limit: float | tuple[float, ...] | None = None
     plant: str = "pinocchio"
+    actuation_delay: int | None = None
     locked_joints: tuple[str, ...] | Mapping[str, float] = ()
     description: str = ""
     source: Path | None = None
@@ -186,6 +191,7 @@ class Scenario:
             "seed": self.seed,
             "torque_limit": _plain(self.torque_limit),
             "plant": self.plant,
+            "actuation_delay": self.actuation_delay,
         }
 
 
@@ -287,6 +293,7 @@ def _scenario(spec: schema.ScenarioFile, source: Path | None) -> Scenario:
         seed=spec.seed,
         torque_limit=spec.torque_limit,
         plant=spec.plant,
+        actuation_delay=spec.actuation_delay,
         locked_joints=MappingProxyType(locked) if isinstance(locked, Mapping) else tuple(locked),
         description=spec.description,
         source=source,
@@ -319,6 +326,12 @@ def _checked(scenario: Scenario, source: str | None) -> Scenario:
             f"the {scenario.plant} plant steps under a held torque: give a sample_period [s], or "
             "use plant: pinocchio for continuous time",
             "plant",
+        )
+    if scenario.sample_period is None and scenario.actuation_delay:
+        raise error(
+            f"an actuation delay of {count(scenario.actuation_delay, 'sample')} needs samples: "
+            "give a sample_period [s], or set actuation_delay to 0 for continuous time",
+            "actuation_delay",
         )
     if scenario.sample_period is None and scenario.disturbance > 0:
         raise error(
