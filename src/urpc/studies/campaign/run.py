@@ -198,7 +198,9 @@ def _execute(scenario, specs, store, workers, scheduler, connect_timeout, progre
     except KeyboardInterrupt:
         report.close(failed=True)
         directory = None if store is None else store.directory
-        raise CampaignInterrupted(len(collected), len(specs), directory) from None
+        # What the store holds: the interrupt may fall between a run's commit and its count.
+        recorded = len(collected) if store is None else store.count()
+        raise CampaignInterrupted(recorded, len(specs), directory) from None
     except BaseException:
         report.close(failed=True)  # no bar left above the error line
         raise
