@@ -16,6 +16,7 @@ from urpc.errors import InputError
 from urpc.formats import FORMATS, json_schema_text
 from urpc.formats import scenario as scenario_format
 from urpc.formats.base import validate
+from urpc.formats.controller_options import IntervalOptions
 from urpc.formats.uncertainty import UncertaintyFile
 
 jsonschema = pytest.importorskip("jsonschema")
@@ -89,7 +90,7 @@ def test_the_interval_options_are_synthesize_keywords():
         for p in inspect.signature(synthesize).parameters.values()
         if p.kind is inspect.Parameter.KEYWORD_ONLY and p.name != "sample_period"
     ]
-    assert list(scenario_format.IntervalOptions.model_fields) == keywords
+    assert list(IntervalOptions.model_fields) == keywords
 
 
 def test_scenario_defaults_are_the_formats():

@@ -1,14 +1,14 @@
 """The scenario file: everything one simulation run needs.
 
 Documented in ``docs/scenarios.md``; read by :func:`urpc.studies.scenario.load_scenario`. Paths are
-resolved against ``context["base"]`` (the scenario's folder) and must exist. The names of the
-controllers, bound methods, plants and trajectories are declared here; tests check them against
-the registries of :mod:`urpc.bounds`, :mod:`urpc.sim.plants` and :mod:`urpc.trajectories`.
+resolved against ``context["base"]`` (the scenario's folder) and must exist. The controllers'
+options are in :mod:`.controller_options`. The names of the controllers, bound methods, plants
+and trajectories come from :mod:`urpc.names`; tests check them against the registries of
+:mod:`urpc.bounds`, :mod:`urpc.sim.plants` and :mod:`urpc.trajectories`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union, get_args
 
@@ -26,33 +26,13 @@ from pydantic import (
 from .. import names
 from ..errors import did_you_mean
 from .base import FieldError, FileFormat
-from .values import Count, NonNegative, Number, Positive, PositiveCount, Text, Vector
+from .controller_options import ControllerOptions
+from .values import Count, NonNegative, Number, Positive, Text, Vector, either
 
 # The fixed sets, from the one place that names them (urpc.names).
 ControllerName = Literal[names.CONTROLLERS]
-BoundMethodName = Literal[names.BOUND_METHODS]
 PlantBackend = Literal[names.PLANT_BACKENDS]
 TrajectoryKind = Literal[names.TRAJECTORY_KINDS]
-#: How a sampled interval controller runs: ``implicit`` (the sampled-data law) or ``paper`` (the
-#: paper's law unchanged).
-SampledLaw = Literal[names.SAMPLED_LAWS]
-
-
-def _form(value: Any) -> str:
-    if isinstance(value, list | tuple):
-        return "list"
-    return "mapping" if isinstance(value, Mapping) else "scalar"
-
-
-def _either(expected: str, scalar: Any = None, mapping: Any = None, array: Any = None) -> Any:
-    """The forms of one value told apart by its YAML type (a text or number, a mapping, a list),
-    so that a wrong value gets the one message of the form it has."""
-    forms = {"scalar": scalar, "mapping": mapping, "list": array}
-    members = tuple(Annotated[kind, Tag(tag)] for tag, kind in forms.items() if kind is not None)
-    return Annotated[
-        Union[members],  # noqa: UP007 - built from a tuple
-        Discriminator(_form, custom_error_type="form", custom_error_message=f"expected {expected}"),
-    ]
 
 
 def resolve_file(value: Any, info: ValidationInfo, what: str, alternatives: str = "") -> Path:
@@ -89,105 +69,7 @@ def _all_positive(values: tuple[float, ...]) -> tuple[float, ...]:
 
 
 _VECTOR = "a number or a list of numbers, one per joint"
-ScalarOrVector = _either(_VECTOR, scalar=Number, array=Vector)
-#: A gain: a number, a diagonal (one per joint) or a matrix (list of rows).
-Gain = _either(
-    "a number, a list (diagonal) or a list of rows (matrix)",
-    scalar=Positive("SI"),
-    array=Annotated[
-        Annotated[Vector, Tag("diagonal")] | Annotated[tuple[Vector, ...], Tag("rows")],
-        Discriminator(lambda v: "rows" if v and isinstance(v[0], list | tuple) else "diagonal"),
-    ],
-)
-
-
-# ---------------------------------------------------------------------------- controllers
-class IntervalOptions(FileFormat):
-    """Keyword arguments of :func:`urpc.control.synthesis.synthesize` (the sample period is the
-    scenario's own)."""
-
-    method: BoundMethodName | None = Field(
-        None, title="bound method", description="default: by box kind (urpc.bounds.METHODS)"
-    )
-    kappa_P: Positive("s/rad") | None = Field(None, description="[s/rad], >= 1 (2)")
-    kappa_I: Positive("1/rad^2") | None = Field(None, description="[1/rad^2] (1)")
-    phi_P: Positive("N m s/rad") | None = Field(None, description="[N m s/rad], >= 1 (1)")
-    phi_I: Positive("N m/rad^2") | None = Field(None, description="[N m/rad^2] (1e6)")
-    Kr: Gain | None = Field(None, description="[1/s]; default 3/sqrt(epsilon)")
-    sampled_law: SampledLaw = Field(
-        "implicit",
-        description="sampled runs: implicit (the sampled-data law) or paper (the paper's law "
-        "unchanged)",
-    )
-    delay: Literal[0, 1] = Field(
-        0,
-        description="samples between a state and the period its torque acts over: 0, or 1 (the "
-        "law predicts one period ahead; urpc.control.delay)",
-    )
-
-
-def _betas_word(value: Any) -> Any:
-    if value not in ("estimate", "paper"):
-        raise ValueError(f"{value!r} is not 'estimate' or 'paper', nor a mapping of beta0..beta3")
-    return value
-
-
-class Betas(FileFormat):
-    """The r-alpha bounds ``beta0..beta3`` [SI]."""
-
-    beta0: NonNegative("SI")
-    beta1: NonNegative("SI")
-    beta2: NonNegative("SI")
-    beta3: NonNegative("SI")
-
-
-class RAlphaOptions(FileFormat):
-    """Keyword arguments of :func:`urpc.control.r_alpha.synthesize_r_alpha`."""
-
-    r: Positive("rad/s") | None = Field(None, description="[rad/s] (1e-2)")
-    alpha: Positive("1/s") | None = Field(None, description="[1/s] (1)")
-    Lambda: Gain | None = Field(None, description="[1/s]")
-    Q: Gain | None = Field(None, description="[N m s/rad]")
-    eta: Positive("N m rad/s") | None = Field(None, description="[N m rad/s]")
-    betas: (
-        _either(
-            "'estimate', 'paper' or a mapping of beta0..beta3",
-            scalar=Annotated[Literal["estimate", "paper"], BeforeValidator(_betas_word)],
-            mapping=Betas,
-        )
-        | None
-    ) = Field(None, description="estimate (default), paper, or beta0..beta3")
-    n_samples: PositiveCount | None = Field(None, description="samples of the estimate (1e5)")
-    seed: Count | None = Field(None, description="seed of the estimate (0)")
-    disturbance_bound: NonNegative("N m") | None = Field(
-        None, description="the bound the designer assumes [N m]"
-    )
-    q_range: Vector | None = Field(None, description="[low, high] of q in the estimate [rad]")
-
-    @model_validator(mode="after")
-    def _range(self) -> RAlphaOptions:
-        if self.q_range is not None and (
-            len(self.q_range) != 2 or self.q_range[0] > self.q_range[1]
-        ):
-            raise FieldError(
-                "q_range", f"{list(self.q_range)}: expected [low, high] [rad] with low <= high"
-            )
-        return self
-
-
-class ComputedTorqueOptions(FileFormat):
-    """Keyword arguments of :func:`urpc.control.computed_torque.synthesize_computed_torque`."""
-
-    natural_frequency: Positive("rad/s") | None = Field(None, description="[rad/s] (10)")
-    damping: Positive("1") | None = Field(None, description="damping ratio (1)")
-
-
-class ControllerOptions(FileFormat):
-    """The options of each controller; only those of the controller that runs are used."""
-
-    interval: IntervalOptions | None = None
-    r_alpha: RAlphaOptions | None = Field(None, alias="r-alpha")
-    computed_torque: ComputedTorqueOptions | None = Field(None, alias="computed-torque")
+ScalarOrVector = either(_VECTOR, scalar=Number, array=Vector)
 
 
 # ---------------------------------------------------------------------------- trajectories
@@ -271,7 +153,7 @@ class WaypointsTrajectory(FileFormat):
     acceleration_limit: ScalarOrVector | None = Field(None, description="[rad/s^2] (5)")
 
 
-Trajectory = _either(
+Trajectory = either(
     "a kind (paper, sinusoid, quintic) or a mapping with kind and options (also file, waypoints)",
     scalar=Annotated[TrajectoryKind, BeforeValidator(_kind)],
     mapping=Annotated[
@@ -320,7 +202,7 @@ _POINT_FILE = _file(
     "; give a file, 'sample' or 'nominal'",
     {"type": "string", "not": {"enum": list(_WORDS)}, "description": "a parameter-point file"},
 )
-TrueParameters = _either(
+TrueParameters = either(
     "a parameter-point file, 'sample', 'nominal', {file: ...} or {sample: {seed: ...}}",
     scalar=Annotated[
         Annotated[Literal["sample", "nominal"], Tag("word")] | Annotated[_POINT_FILE, Tag("file")],
@@ -333,7 +215,7 @@ TrueParameters = _either(
 )
 
 
-_LockedJoints = _either(
+_LockedJoints = either(
     "a list of joint names or a mapping name: position [rad]",
     mapping=dict[str, Number],
     array=tuple[Text, ...],
@@ -358,7 +240,7 @@ class ScenarioFile(FileFormat):
         "sample", description="a parameter-point file, sample, {sample: {seed: 7}} or nominal"
     )
     trajectory: Trajectory = Field("sinusoid", description="a kind, or kind and options")
-    initial_condition: _either(
+    initial_condition: either(
         "at_reference or a mapping of q0, qd0, offset",
         scalar=Literal["at_reference"],
         mapping=InitialState,
@@ -376,7 +258,7 @@ class ScenarioFile(FileFormat):
     )
     duration: Positive("s") = Field(10.0, description="simulated time [s]")
     seed: Count = Field(0, description="seed of the disturbance draws (and of a sampled plant)")
-    torque_limit: _either(
+    torque_limit: either(
         "a number > 0 [N m], 'none' or a list, one per joint",
         scalar=Positive("N m", keyword="none"),
         array=Annotated[Vector, AfterValidator(_all_positive)],

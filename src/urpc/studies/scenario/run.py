@@ -8,7 +8,7 @@ from typing import Any
 
 from ...control.base import Controller
 from ...errors import InputError, did_you_mean
-from ...formats.scenario import IntervalOptions
+from ...formats.controller_options import IntervalOptions
 from ...model.parameter_box import JOINTS, joint_values, link_points
 from .settings import CONTROLLERS, Scenario
 from .setup import ScenarioSetup, build
