@@ -21,14 +21,14 @@ from pydantic import BaseModel
 from .assembly import AssemblyFile
 from .module import ModuleFile
 from .parameter_point import ParameterPointFile
-from .scenario import ScenarioFile
+from .scenario import Scenario
 from .uncertainty import UncertaintyFile
 
 #: Every format by the name of its JSON Schema file (``docs/schemas/<name>.schema.json``).
 FORMATS: dict[str, type[BaseModel]] = {
     "uncertainty": UncertaintyFile,
     "parameter-point": ParameterPointFile,
-    "scenario": ScenarioFile,
+    "scenario": Scenario,
     "module": ModuleFile,
     "assembly": AssemblyFile,
 }

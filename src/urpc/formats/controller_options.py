@@ -116,3 +116,21 @@ class ControllerOptions(FileFormat):
     interval: IntervalOptions | None = None
     r_alpha: RAlphaOptions | None = Field(None, alias="r-alpha")
     computed_torque: ComputedTorqueOptions | None = Field(None, alias="computed-torque")
+
+    def by_controller(self, mode: Literal["python", "json"] = "python") -> dict[str, dict]:
+        """The options given for each controller (``{}``: none), by controller name."""
+        return {
+            field.alias or key: {}
+            if (options := getattr(self, key)) is None
+            else options.model_dump(mode=mode, exclude_unset=True)
+            for key, field in type(self).model_fields.items()
+        }
+
+    def merged(self, other: ControllerOptions) -> ControllerOptions:
+        """These options with those given in ``other`` in their place, per controller."""
+        update = {}
+        for key in other.model_fields_set:
+            mine, given = getattr(self, key), getattr(other, key)
+            values = {name: getattr(given, name) for name in given.model_fields_set}
+            update[key] = given if mine is None else mine.model_copy(update=values)
+        return self.model_copy(update=update)

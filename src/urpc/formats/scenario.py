@@ -1,10 +1,14 @@
 """The scenario file: everything one simulation run needs.
 
-Documented in ``docs/scenarios.md``; read by :func:`urpc.studies.scenario.load_scenario`. Paths are
-resolved against ``context["base"]`` (the scenario's folder) and must exist. The controllers'
-options are in :mod:`.controller_options`. The names of the controllers, bound methods, plants
-and trajectories come from :mod:`urpc.names`; tests check them against the registries of
-:mod:`urpc.bounds`, :mod:`urpc.sim.plants` and :mod:`urpc.trajectories`.
+Documented in ``docs/scenarios.md``. :class:`Scenario` is both the file's format and the
+settings the package runs: :func:`urpc.studies.scenario.load_scenario` reads one,
+:meth:`Scenario.with_overrides` makes a changed copy (each value checked like the file's, the
+combination on the copy) and :func:`urpc.studies.scenario.build` turns it into the objects of a
+run. Paths are resolved against ``context["base"]`` (the scenario's folder) and must exist;
+``context["source"]`` is the file (:attr:`Scenario.source`, whose stem names a scenario without a
+``name``). The controllers' options are in :mod:`.controller_options`. The names of the
+controllers, bound methods, plants and trajectories come from :mod:`urpc.names`; tests check them
+against the registries of :mod:`urpc.bounds`, :mod:`urpc.sim.plants` and :mod:`urpc.trajectories`.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from pydantic import (
     BeforeValidator,
     Discriminator,
     Field,
+    PrivateAttr,
     Tag,
     ValidationInfo,
     WithJsonSchema,
@@ -24,8 +29,8 @@ from pydantic import (
 )
 
 from .. import names
-from ..errors import did_you_mean
-from .base import FieldError, FileFormat
+from ..errors import InputError, did_you_mean
+from .base import FieldError, FileFormat, validate_fields
 from .controller_options import ControllerOptions
 from .values import Count, NonNegative, Number, Positive, Text, Vector, either
 
@@ -209,7 +214,8 @@ TrueParameters = either(
         Discriminator(lambda v: "word" if v in _WORDS else "file"),
     ],
     mapping=Annotated[
-        Annotated[ParameterFile, Tag("file")] | Annotated[SampledParameters, Tag("sample")],
+        Annotated[ParameterFile, AfterValidator(lambda v: v.file), Tag("file")]
+        | Annotated[SampledParameters, Tag("sample")],
         Discriminator(lambda v: "file" if "file" in v else "sample"),
     ],
 )
@@ -222,16 +228,30 @@ _LockedJoints = either(
 )
 
 
-class ScenarioFile(FileFormat):
-    """A scenario file (units in brackets; defaults as in :class:`urpc.studies.scenario.Scenario`)."""
+#: Where the values of :meth:`Scenario.with_overrides` come from, in error messages.
+OVERRIDE_SOURCE = "command-line override"
 
-    name: Text | None = Field(None, description="default: the file name without .yaml")
+
+def _default_name(name: str | None, info: ValidationInfo) -> str:
+    source = (info.context or {}).get("source")
+    return name or (Path(source).stem if source is not None else "scenario")
+
+
+class Scenario(FileFormat):
+    """A scenario file (units in brackets): the settings of one simulation run, validated and
+    frozen, with paths made absolute."""
+
+    _source: Path | None = PrivateAttr(None)
+
+    name: Annotated[Text | None, AfterValidator(_default_name)] = Field(
+        None, validate_default=True, description="default: the file name without .yaml"
+    )
     description: Text = Field("", description="free text")
     robot: Annotated[Text, AfterValidator(_robot)] = Field(
         description="a built-in or example-robot-data name, or a URDF path"
     )
-    locked_joints: _LockedJoints | None = Field(
-        None, description="joint names (locked at 0) or name: position [rad or m]"
+    locked_joints: _LockedJoints = Field(
+        (), description="joint names (locked at 0) or name: position [rad or m]"
     )
     uncertainty: _file("uncertainty") = Field(
         description="the uncertainty file: what the controller knows"
@@ -264,3 +284,91 @@ class ScenarioFile(FileFormat):
         array=Annotated[Vector, AfterValidator(_all_positive)],
     ) = Field(None, description="per-joint torque bound [N m]: a number or one per joint")
     plant: PlantBackend = Field("pinocchio", description="pinocchio, or mujoco (sampled runs)")
+
+    def model_post_init(self, context: Any) -> None:
+        source = (context or {}).get("source")
+        self._source = None if source is None else Path(source)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Scenario:
+        """The checks that combine fields, of a file and of every override."""
+        period = self.sample_period
+        if period is not None and period > self.duration:
+            raise FieldError(
+                "sample_period",
+                f"the sample period {period:g} s is longer than the duration {self.duration:g} s",
+            )
+        if period is None and self.plant != "pinocchio":
+            raise FieldError(
+                "plant",
+                f"the {self.plant} plant steps under a held torque: give a sample_period [s], or "
+                "use plant: pinocchio for continuous time",
+            )
+        if period is None and self.disturbance > 0:
+            raise FieldError(
+                "disturbance",
+                "the disturbance is drawn once per control sample: give a sample_period [s] or "
+                "set disturbance to 0 for continuous time",
+            )
+        return self
+
+    @property
+    def source(self) -> Path | None:
+        """The file the scenario was read from."""
+        return self._source
+
+    @property
+    def continuous(self) -> bool:
+        return self.sample_period is None
+
+    @property
+    def options(self) -> dict[str, Any]:
+        """The options of the controller that runs (keyword arguments of its synthesis)."""
+        return self.controller_options.by_controller()[self.controller]
+
+    @property
+    def true_parameter_seed(self) -> int | None:
+        """The seed of a sampled true plant: its own, else the scenario's ``seed``; ``None``
+        when the true parameters are a file or the nominal ones."""
+        true = self.true_parameters
+        if isinstance(true, SampledParameters):
+            return self.seed if true.sample is None else true.sample.seed
+        return self.seed if true == "sample" else None
+
+    def with_overrides(self, **values: Any) -> Scenario:
+        """A copy with some fields replaced; ``None`` values are ignored (flags not given).
+
+        Values are validated like file entries; relative paths are resolved against the current
+        directory. ``controller_options`` entries are merged per controller.
+
+        Raises:
+            InputError: an unknown field (with the closest name) or an invalid value.
+        """
+        given = {key: value for key, value in values.items() if value is not None}
+        update = validate_fields(Scenario, given, OVERRIDE_SOURCE, context={"base": Path.cwd()})
+        if "controller_options" in update:
+            update["controller_options"] = self.controller_options.merged(
+                update["controller_options"]
+            )
+        try:
+            return self.model_copy(update=update)._consistent()
+        except FieldError as exc:
+            raise InputError(str(exc), OVERRIDE_SOURCE, exc.path[0]) from None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data (YAML/JSON-ready) with every key of the scenario file; paths absolute."""
+        document = self.model_dump(mode="json")
+        seed = self.true_parameter_seed
+        if seed is not None:
+            document["true_parameters"] = {"sample": {"seed": seed}}
+        trajectory = self.trajectory
+        document["trajectory"] = {"kind": trajectory}
+        if not isinstance(trajectory, str):
+            document["trajectory"].update(trajectory.model_dump(mode="json", exclude_unset=True))
+        ic = document["initial_condition"]
+        if isinstance(ic, dict):
+            document["initial_condition"] = {k: v for k, v in ic.items() if v} or "at_reference"
+        if self.sample_period is None:
+            document["sample_period"] = "continuous"
+        document["controller_options"] = self.controller_options.by_controller("json")
+        return document

@@ -14,7 +14,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal, Union
 
-from pydantic import BeforeValidator, Discriminator, Tag, ValidationInfo, WithJsonSchema
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    Discriminator,
+    Tag,
+    ValidationInfo,
+    WithJsonSchema,
+)
 
 from ..expressions import ExpressionOverflow, evaluate
 
@@ -142,7 +149,8 @@ Text = Annotated[str, BeforeValidator(_text), WithJsonSchema({"type": ["string",
 def _form(value: Any) -> str:
     if isinstance(value, list | tuple):
         return "list"
-    return "mapping" if isinstance(value, Mapping) else "scalar"
+    # A model is a mapping once validated (when the value is serialized).
+    return "mapping" if isinstance(value, Mapping | BaseModel) else "scalar"
 
 
 def either(expected: str, scalar: Any = None, mapping: Any = None, array: Any = None) -> Any:
