@@ -121,14 +121,28 @@ def run_bench(args) -> int:
 
 
 def run_bench_bounds(args) -> int:
-    from ..studies.benchmark import (
-        BENCHMARK_ROBOTS,
-        SUITE_METHODS,
-        bench_bounds,
-        format_machine,
-        format_timings,
-        machine_info,
+    from ..studies.benchmark import SUITE_METHODS, bench_bounds, format_timings
+
+    robots = _robots(args)
+    methods = args.methods or list(SUITE_METHODS)
+    repeats = args.repeats or (11 if getattr(args, "quick", False) else 51)
+    return _report(args, lambda: bench_bounds(robots, methods, repeats), format_timings)
+
+
+def run_bench_loop(args) -> int:
+    from ..studies.benchmark import format_latency, loop_latency
+
+    robots = _robots(args)
+    return _report(
+        args,
+        lambda: {"loop_step": {name: loop_latency(name, args.steps) for name in robots}},
+        lambda result: format_latency(result["loop_step"]),
     )
+
+
+def _robots(args) -> list[str]:
+    """``--robots`` of a ``bench`` part (default: every benchmark robot), checked."""
+    from ..studies.benchmark import BENCHMARK_ROBOTS
 
     robots = args.robots or list(BENCHMARK_ROBOTS)
     unknown = [name for name in robots if name not in BENCHMARK_ROBOTS]
@@ -137,41 +151,21 @@ def run_bench_bounds(args) -> int:
             f"unknown benchmark robot {', '.join(unknown)}; valid: {', '.join(BENCHMARK_ROBOTS)}",
             field="robots",
         )
-    methods = args.methods or list(SUITE_METHODS)
-    repeats = args.repeats or (11 if getattr(args, "quick", False) else 51)
+    return robots
+
+
+def _report(args, measure, text) -> int:
+    """A ``bench`` part's figures (``measure()``) with the machine they were measured on: one
+    JSON object with ``--json``, else the machine's line and ``text(figures)``."""
+    from ..studies.benchmark import format_machine, machine_info
+
     machine = machine_info()
-    result = bench_bounds(robots, methods, repeats)
+    result = measure()
     if getattr(args, "json", False):
         print_json({"machine": machine, **result})
         return EXIT_OK
     print(f"{format_machine(machine)}\n")
-    print(format_timings(result))
-    return EXIT_OK
-
-
-def run_bench_loop(args) -> int:
-    from ..studies.benchmark import (
-        BENCHMARK_ROBOTS,
-        format_latency,
-        format_machine,
-        loop_latency,
-        machine_info,
-    )
-
-    robots = args.robots or list(BENCHMARK_ROBOTS)
-    unknown = [name for name in robots if name not in BENCHMARK_ROBOTS]
-    if unknown:
-        raise InputError(
-            f"unknown benchmark robot {', '.join(unknown)}; valid: {', '.join(BENCHMARK_ROBOTS)}",
-            field="robots",
-        )
-    machine = machine_info()
-    table = {name: loop_latency(name, args.steps) for name in robots}
-    if getattr(args, "json", False):
-        print_json({"machine": machine, "loop_step": table})
-        return EXIT_OK
-    print(f"{format_machine(machine)}\n")
-    print(format_latency(table))
+    print(text(result))
     return EXIT_OK
 
 
