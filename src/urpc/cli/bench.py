@@ -51,17 +51,9 @@ def register(commands) -> None:
         "+-1 cm CoM and +-10 % inertia on every link of the UR5 and the Panda), next to one "
         "nominal pin.rnea call timed in the same batches.",
     )
-    # SUPPRESS: `urpc bench --json bounds` and `urpc bench bounds --json` both work.
-    b.add_argument(
-        "--json", action="store_true", default=argparse.SUPPRESS, help="print one JSON object"
-    )
+    _add_json(b)
     b.add_argument("--quick", action="store_true", default=argparse.SUPPRESS, help="fewer repeats")
-    b.add_argument(
-        "--robots",
-        type=names,
-        metavar="NAMES",
-        help="comma-separated robots (default: rr_planar,ur5,panda)",
-    )
+    _add_robots(b)
     b.add_argument(
         "--methods",
         type=names,
@@ -81,9 +73,7 @@ def register(commands) -> None:
         "measures itself, next to one nominal pin.rnea of the same arm timed the same way; "
         "prints p50, p99, p99.9 and max. The tail is the operating system's on a loaded machine.",
     )
-    lp.add_argument(
-        "--json", action="store_true", default=argparse.SUPPRESS, help="print one JSON object"
-    )
+    _add_json(lp)
     lp.add_argument(
         "--steps",
         type=positive_int,
@@ -91,12 +81,7 @@ def register(commands) -> None:
         metavar="N",
         help=f"steps timed per robot (default {DEFAULT_LOOP_STEPS})",
     )
-    lp.add_argument(
-        "--robots",
-        type=names,
-        metavar="NAMES",
-        help="comma-separated robots (default: rr_planar,ur5,panda)",
-    )
+    _add_robots(lp)
     lp.set_defaults(handler=run_bench_loop)
 
 
@@ -137,6 +122,23 @@ def run_bench_loop(args) -> int:
         args,
         lambda: {"loop_step": {name: loop_latency(name, args.steps) for name in robots}},
         lambda result: format_latency(result["loop_step"]),
+    )
+
+
+def _add_json(part) -> None:
+    # SUPPRESS: `urpc bench --json bounds` and `urpc bench bounds --json` both work.
+    part.add_argument(
+        "--json", action="store_true", default=argparse.SUPPRESS, help="print one JSON object"
+    )
+
+
+def _add_robots(part) -> None:
+    """``--robots`` of a ``bench`` part (read back by :func:`_robots`)."""
+    part.add_argument(
+        "--robots",
+        type=names,
+        metavar="NAMES",
+        help="comma-separated robots (default: rr_planar,ur5,panda)",
     )
 
 
