@@ -362,9 +362,11 @@ class Scenario(FileFormat):
         if seed is not None:
             document["true_parameters"] = {"sample": {"seed": seed}}
         trajectory = self.trajectory
-        document["trajectory"] = {"kind": trajectory}
-        if not isinstance(trajectory, str):
-            document["trajectory"].update(trajectory.model_dump(mode="json", exclude_unset=True))
+        document["trajectory"] = (
+            {"kind": trajectory}
+            if isinstance(trajectory, str)
+            else {"kind": trajectory.kind, **trajectory.model_dump(mode="json", exclude_unset=True)}
+        )
         ic = document["initial_condition"]
         if isinstance(ic, dict):
             document["initial_condition"] = {k: v for k, v in ic.items() if v} or "at_reference"
