@@ -16,7 +16,6 @@ from urpc.errors import InputError
 from urpc.studies.scenario import (
     CONTROLLERS,
     PLANT_BACKENDS,
-    Scenario,
     build,
     build_controller,
     interval_synthesis_options,
@@ -55,7 +54,7 @@ def test_paper_scenarios_load_and_build(number, ic):
     if period is not None:
         paper_gains["sampled_law"] = "paper"
     assert scenario.options == paper_gains
-    r_alpha = scenario.controller_options["r-alpha"]
+    r_alpha = scenario.controller_options.by_controller()["r-alpha"]
     assert (r_alpha["r"], r_alpha["alpha"], r_alpha["Q"], r_alpha["eta"]) == (1e-2, 1, 35, 7e-5)
 
     setup = build(scenario)
@@ -216,7 +215,7 @@ def test_defaults_and_arithmetic_values(tmp_path):
     assert scenario.epsilon == pytest.approx(2e-3)  # YAML reads 1e-3 as text; it is parsed
     assert scenario.sample_period == pytest.approx(1e-3)
     assert scenario.name == "scenario" and scenario.seed == 0 and scenario.duration == 10.0
-    assert scenario.true_parameters.kind == "sample"
+    assert scenario.true_parameters == "sample" and scenario.true_parameter_seed == 0
     setup = build(scenario)
     assert isinstance(setup.trajectory, SinusoidTrajectory)
     reference = setup.trajectory.reference(0.0)
@@ -290,7 +289,14 @@ def test_overrides():
     with pytest.raises(InputError, match="valid: computed-torque, interval, r-alpha"):
         scenario.with_overrides(controller="lqr")
     sampled = scenario.with_overrides(true_parameters="sample", seed=4)
-    assert sampled.true_parameters.kind == "sample" and sampled.seed == 4
+    assert sampled.true_parameters == "sample" and sampled.true_parameter_seed == 4
+    # Each value is checked alone, the combination on the copy: a continuous scenario may run
+    # shorter than the default period, and the copy keeps the file it came from.
+    short = load_scenario("rr_planar/s1_ic1").with_overrides(duration=5e-4)
+    assert short.duration == 5e-4 and short.continuous and short.source.name == "s1_ic1.yaml"
+    with pytest.raises(InputError, match="longer than the duration") as info:
+        scenario.with_overrides(duration=5e-5)  # the file's period is 1e-4 s
+    assert info.value.field == "sample_period" and info.value.source == "command-line override"
 
 
 def test_to_dict_round_trip(tmp_path):
@@ -313,12 +319,6 @@ def test_build_controller_for_each_kind():
     interval = build_controller(setup)
     assert interval.name == "interval"
     assert {c.name for c in (r_alpha, computed, interval)} == set(CONTROLLERS)
-
-
-def test_scenario_defaults_are_consistent():
-    scenario = Scenario(name="x", robot="rr_planar", uncertainty=RR_DIR / "uncertainty.yaml")
-    assert set(scenario.controller_options) == set(CONTROLLERS)
-    assert scenario.options == {}
 
 
 def test_plant_backend_key_reaches_the_run(tmp_path):

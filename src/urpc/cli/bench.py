@@ -51,17 +51,9 @@ def register(commands) -> None:
         "+-1 cm CoM and +-10 % inertia on every link of the UR5 and the Panda), next to one "
         "nominal pin.rnea call timed in the same batches.",
     )
-    # SUPPRESS: `urpc bench --json bounds` and `urpc bench bounds --json` both work.
-    b.add_argument(
-        "--json", action="store_true", default=argparse.SUPPRESS, help="print one JSON object"
-    )
+    _add_json(b)
     b.add_argument("--quick", action="store_true", default=argparse.SUPPRESS, help="fewer repeats")
-    b.add_argument(
-        "--robots",
-        type=names,
-        metavar="NAMES",
-        help="comma-separated robots (default: rr_planar,ur5,panda)",
-    )
+    _add_robots(b)
     b.add_argument(
         "--methods",
         type=names,
@@ -81,9 +73,7 @@ def register(commands) -> None:
         "measures itself, next to one nominal pin.rnea of the same arm timed the same way; "
         "prints p50, p99, p99.9 and max. The tail is the operating system's on a loaded machine.",
     )
-    lp.add_argument(
-        "--json", action="store_true", default=argparse.SUPPRESS, help="print one JSON object"
-    )
+    _add_json(lp)
     lp.add_argument(
         "--steps",
         type=positive_int,
@@ -91,12 +81,7 @@ def register(commands) -> None:
         metavar="N",
         help=f"steps timed per robot (default {DEFAULT_LOOP_STEPS})",
     )
-    lp.add_argument(
-        "--robots",
-        type=names,
-        metavar="NAMES",
-        help="comma-separated robots (default: rr_planar,ur5,panda)",
-    )
+    _add_robots(lp)
     lp.set_defaults(handler=run_bench_loop)
 
 
@@ -121,14 +106,45 @@ def run_bench(args) -> int:
 
 
 def run_bench_bounds(args) -> int:
-    from ..studies.benchmark import (
-        BENCHMARK_ROBOTS,
-        SUITE_METHODS,
-        bench_bounds,
-        format_machine,
-        format_timings,
-        machine_info,
+    from ..studies.benchmark import SUITE_METHODS, bench_bounds, format_timings
+
+    robots = _robots(args)
+    methods = args.methods or list(SUITE_METHODS)
+    repeats = args.repeats or (11 if getattr(args, "quick", False) else 51)
+    return _report(args, lambda: bench_bounds(robots, methods, repeats), format_timings)
+
+
+def run_bench_loop(args) -> int:
+    from ..studies.benchmark import format_latency, loop_latency
+
+    robots = _robots(args)
+    return _report(
+        args,
+        lambda: {"loop_step": {name: loop_latency(name, args.steps) for name in robots}},
+        lambda result: format_latency(result["loop_step"]),
     )
+
+
+def _add_json(part) -> None:
+    # SUPPRESS: `urpc bench --json bounds` and `urpc bench bounds --json` both work.
+    part.add_argument(
+        "--json", action="store_true", default=argparse.SUPPRESS, help="print one JSON object"
+    )
+
+
+def _add_robots(part) -> None:
+    """``--robots`` of a ``bench`` part (read back by :func:`_robots`)."""
+    part.add_argument(
+        "--robots",
+        type=names,
+        metavar="NAMES",
+        help="comma-separated robots (default: rr_planar,ur5,panda)",
+    )
+
+
+def _robots(args) -> list[str]:
+    """``--robots`` of a ``bench`` part (default: every benchmark robot), checked."""
+    from ..studies.benchmark import BENCHMARK_ROBOTS
 
     robots = args.robots or list(BENCHMARK_ROBOTS)
     unknown = [name for name in robots if name not in BENCHMARK_ROBOTS]
@@ -137,41 +153,21 @@ def run_bench_bounds(args) -> int:
             f"unknown benchmark robot {', '.join(unknown)}; valid: {', '.join(BENCHMARK_ROBOTS)}",
             field="robots",
         )
-    methods = args.methods or list(SUITE_METHODS)
-    repeats = args.repeats or (11 if getattr(args, "quick", False) else 51)
+    return robots
+
+
+def _report(args, measure, text) -> int:
+    """A ``bench`` part's figures (``measure()``) with the machine they were measured on: one
+    JSON object with ``--json``, else the machine's line and ``text(figures)``."""
+    from ..studies.benchmark import format_machine, machine_info
+
     machine = machine_info()
-    result = bench_bounds(robots, methods, repeats)
+    result = measure()
     if getattr(args, "json", False):
         print_json({"machine": machine, **result})
         return EXIT_OK
     print(f"{format_machine(machine)}\n")
-    print(format_timings(result))
-    return EXIT_OK
-
-
-def run_bench_loop(args) -> int:
-    from ..studies.benchmark import (
-        BENCHMARK_ROBOTS,
-        format_latency,
-        format_machine,
-        loop_latency,
-        machine_info,
-    )
-
-    robots = args.robots or list(BENCHMARK_ROBOTS)
-    unknown = [name for name in robots if name not in BENCHMARK_ROBOTS]
-    if unknown:
-        raise InputError(
-            f"unknown benchmark robot {', '.join(unknown)}; valid: {', '.join(BENCHMARK_ROBOTS)}",
-            field="robots",
-        )
-    machine = machine_info()
-    table = {name: loop_latency(name, args.steps) for name in robots}
-    if getattr(args, "json", False):
-        print_json({"machine": machine, "loop_step": table})
-        return EXIT_OK
-    print(f"{format_machine(machine)}\n")
-    print(format_latency(table))
+    print(text(result))
     return EXIT_OK
 
 

@@ -7,7 +7,6 @@ import sys
 from pathlib import Path
 
 from ..control import SAMPLED_LAWS
-from ..errors import InputError
 from .common import (
     EXIT_OK,
     RESULTS_ROOT,
@@ -15,6 +14,7 @@ from .common import (
     UNCERTAINTY_HELP,
     add_certificate_arguments,
     add_output_arguments,
+    add_scenario_argument,
     count,
     non_negative_float,
     non_negative_int,
@@ -22,6 +22,7 @@ from .common import (
     positive_float,
     positive_int,
     print_json,
+    scenario_or_robot,
     show_progress,
     warn_uncertified,
 )
@@ -47,12 +48,7 @@ def register(commands) -> None:
         "continues an interrupted (or killed) campaign with the same settings, with results "
         "identical to an uninterrupted one. One campaign at a time per DIR (a lock).",
     )
-    p.add_argument(
-        "scenario",
-        nargs="?",
-        metavar="SCENARIO",
-        help="scenario YAML file or shipped name (rr_planar/s1_ic1 ...); omit with --robot",
-    )
+    add_scenario_argument(p)
     p.add_argument(
         "--robot",
         metavar="ROBOT",
@@ -113,9 +109,13 @@ def run_campaign_command(args) -> int:
     from ..studies.campaign import CampaignInterrupted, run_campaign
 
     law = args.sampled_law
-    options = None if law is None else {"interval": {"sampled_law": law}}
-    scenario = campaign_scenario(args).with_overrides(
-        duration=args.duration, plant=args.plant, controller_options=options
+    scenario = scenario_or_robot(  # as in simulate; --robot/--uncertainty override SCENARIO's
+        args,
+        "rr_planar/s3_ic1",
+        see=" (see 'urpc campaign --help')",
+        duration=args.duration,
+        plant=args.plant,
+        controller_options=None if law is None else {"interval": {"sampled_law": law}},
     )
     out = output_folder(args.out, default_out(scenario.name))  # before any work
     try:
@@ -147,39 +147,6 @@ def run_campaign_command(args) -> int:
         return EXIT_OK
     print("\n".join(describe_summary(summary, out, result.certificate_source)))
     return EXIT_OK
-
-
-def campaign_scenario(args):
-    """The campaign's scenario: SCENARIO, or ``--robot`` with ``--uncertainty`` (default: the
-    robot's shipped box), as in ``simulate``; with SCENARIO, ``--robot``/``--uncertainty``
-    override its own."""
-    from ..model.catalog import default_uncertainty, resolve_robot
-    from ..model.urdf import robot_display_name
-    from ..studies.scenario import load_scenario, parse_scenario
-
-    uncertainty = args.uncertainty
-    if args.robot is not None and uncertainty is None:
-        resolve_robot(args.robot)  # an unknown name: say so, with the closest one
-        shipped = default_uncertainty(args.robot)
-        uncertainty = None if shipped is None else str(shipped)
-    if args.scenario is not None:
-        return load_scenario(args.scenario).with_overrides(
-            robot=args.robot, uncertainty=uncertainty
-        )
-    if args.robot is None:
-        raise InputError(
-            "give a scenario file (or a shipped name such as rr_planar/s3_ic1) or --robot "
-            "(see 'urpc campaign --help')",
-            field="scenario",
-        )
-    if uncertainty is None:
-        raise InputError(
-            f"robot '{args.robot}' has no shipped uncertainty box; write one with "
-            f"'urpc init {args.robot} --out box.yaml' and give --uncertainty box.yaml",
-            field="uncertainty",
-        )
-    scenario = parse_scenario({"robot": args.robot, "uncertainty": uncertainty})
-    return scenario.with_overrides(name=robot_display_name(args.robot))
 
 
 def resume_command(args, out: Path) -> str:

@@ -169,6 +169,53 @@ def robot_argument(args) -> str:
     return robot
 
 
+def add_scenario_argument(parser) -> None:
+    """The optional ``SCENARIO`` of the commands where ``--robot`` can stand in for it
+    (:func:`scenario_or_robot` reads both)."""
+    parser.add_argument(
+        "scenario",
+        nargs="?",
+        metavar="SCENARIO",
+        help="scenario YAML file or shipped name (rr_planar/s1_ic1 ...); omit with --robot",
+    )
+
+
+def scenario_or_robot(args, example: str, see: str = "", box_help: str = "", **overrides):
+    """The scenario of ``SCENARIO``, with ``--robot``/``--uncertainty`` replacing its own, or of
+    ``--robot`` with ``--uncertainty`` (default: the robot's shipped box) standing in for one;
+    ``overrides`` applied with them (:meth:`urpc.studies.scenario.Scenario.with_overrides`).
+
+    ``example`` (a shipped name), ``see`` and ``box_help`` complete the errors of a command line
+    with neither a scenario nor a robot, and of a robot without a box.
+    """
+    from ..model.catalog import default_uncertainty, resolve_robot
+    from ..model.urdf import robot_display_name
+    from ..studies.scenario import load_scenario, parse_scenario
+
+    uncertainty = args.uncertainty
+    if args.robot is not None and uncertainty is None:
+        resolve_robot(args.robot)  # an unknown name: say so, with the closest one
+        shipped = default_uncertainty(args.robot)
+        uncertainty = None if shipped is None else str(shipped)
+    if args.scenario is not None:
+        return load_scenario(args.scenario).with_overrides(
+            robot=args.robot, uncertainty=uncertainty, **overrides
+        )
+    if args.robot is None:
+        raise InputError(
+            f"give a scenario file (or a shipped name such as {example}) or --robot{see}",
+            field="scenario",
+        )
+    if uncertainty is None:
+        raise InputError(
+            f"robot '{args.robot}' has no shipped uncertainty box; write one with "
+            f"'urpc init {args.robot} --out box.yaml' and give --uncertainty box.yaml{box_help}",
+            field="uncertainty",
+        )
+    scenario = parse_scenario({"robot": args.robot, "uncertainty": uncertainty})
+    return scenario.with_overrides(name=robot_display_name(args.robot), **overrides)
+
+
 def add_output_arguments(
     parser, default: str | None, *, what: str = "result files and figures", progress: bool = True
 ) -> None:

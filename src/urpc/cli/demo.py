@@ -127,20 +127,12 @@ def _common_arguments(p: argparse.ArgumentParser, out: Path) -> None:
 def run_reconfigure(args) -> int:
     from ..studies.demo import reconfigure_demo
 
-    out = args.out or RECONFIGURE_OUT
-    output_folder(out, RECONFIGURE_OUT)  # checked before any work
-    summary = reconfigure_demo(
-        out,
-        configurations=args.assemblies,
-        progress=show_progress(args),
-        duration=args.duration,
-        seed=args.seed,
-        initial_offset=args.initial_offset,
-        replay=args.replay,
+    return _run_demo(
+        args, reconfigure_demo, RECONFIGURE_OUT, _print_reconfigure, configurations=args.assemblies
     )
-    if args.json:
-        print_json(summary)
-        return EXIT_OK
+
+
+def _print_reconfigure(summary: dict) -> None:
     settings = summary["settings"]
     print(
         f"epsilon {settings['epsilon']:g} rad, {1 / settings['sample_period']:g} Hz, "
@@ -161,10 +153,6 @@ def run_reconfigure(args) -> int:
             f"{'yes' if entry['met'] else 'NO':>5} {entry_time:>9} {final:>17} {wall:>8}"
         )
     _print_drives(summary["configurations"])
-    print(f"figure  {summary['figure']}")
-    if summary["replay"]:
-        print(f"replay  {summary['replay']}")
-    return EXIT_OK
 
 
 def _print_drives(configurations) -> None:
@@ -190,23 +178,19 @@ def _print_drives(configurations) -> None:
 def run_tool_change(args) -> int:
     from ..studies.demo import tool_change_demo
 
-    out = args.out or TOOL_CHANGE_OUT
-    output_folder(out, TOOL_CHANGE_OUT)  # checked before any work
-    summary = tool_change_demo(
-        out,
-        progress=show_progress(args),
+    return _run_demo(
+        args,
+        tool_change_demo,
+        TOOL_CHANGE_OUT,
+        _print_tool_change,
         before=args.before,
         after=args.after,
         t_change=args.t_change,
         switch_delay=args.switch_delay,
-        duration=args.duration,
-        seed=args.seed,
-        initial_offset=args.initial_offset,
-        replay=args.replay,
     )
-    if args.json:
-        print_json(summary)
-        return EXIT_OK
+
+
+def _print_tool_change(summary: dict) -> None:
     reentry = summary["reentry_time"]
     phi = summary["phi_at_switch"]
     print(
@@ -224,6 +208,27 @@ def run_tool_change(args) -> int:
         + f"; max error after the change {summary['max_error_after_change']:.3g} rad; "
         + f"met {'yes' if summary['met'] else 'NO'}"
     )
+
+
+def _run_demo(args, demo, default_out: Path, print_text, **options) -> int:
+    """Run ``demo`` into ``--out`` (default ``default_out``, checked before any work) with the
+    options every demo has and its own ``options``; print its summary as one JSON object
+    (``--json``) or as ``print_text`` does, then the files it wrote."""
+    out = args.out or default_out
+    output_folder(out, default_out)  # checked before any work
+    summary = demo(
+        out,
+        progress=show_progress(args),
+        duration=args.duration,
+        seed=args.seed,
+        initial_offset=args.initial_offset,
+        replay=args.replay,
+        **options,
+    )
+    if args.json:
+        print_json(summary)
+        return EXIT_OK
+    print_text(summary)
     print(f"figure  {summary['figure']}")
     if summary["replay"]:
         print(f"replay  {summary['replay']}")

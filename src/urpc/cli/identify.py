@@ -129,13 +129,9 @@ def noise(text: str):
 
 def run_identify(args) -> int:
     from ..model.robot import load_robot
-    from .init import write_new_file
+    from .init import check_new_file, write_new_file
 
-    out: Path = args.out
-    if out.exists() and not args.force:
-        raise InputError("the file exists; give --force to overwrite it", source=out)
-    if out.is_dir():
-        raise InputError("is a folder; give a file name", source=out)
+    out = check_new_file(args.out, args.force)
     robot = load_robot(args.robot, locked_joints=args.lock)
     if args.excite:
         return _excite(args, robot, out, write_new_file)

@@ -109,11 +109,7 @@ def run_init(args) -> int:
     from ..model.robot import load_robot
     from ..model.uncertainty import parse_uncertainty
 
-    out: Path = args.out
-    if out.exists() and not args.force:
-        raise InputError("the file exists; give --force to overwrite it", source=out)
-    if out.is_dir():
-        raise InputError("is a folder; give a file name such as box.yaml", source=out)
+    out = check_new_file(args.out, args.force, " such as box.yaml")
     robot = load_robot(args.robot, locked_joints=args.lock)
     link, mass = args.payload if args.payload is not None else (None, None)
     settings = BoxTemplateSettings(args.mass, args.com, args.inertia, link, mass)
@@ -163,6 +159,20 @@ def run_init(args) -> int:
     print(f"next: urpc check {args.robot}{lock} --uncertainty {out}")
     print(f"      urpc simulate --robot {args.robot}{lock} --uncertainty {out}")
     return EXIT_OK
+
+
+def check_new_file(path: Path, overwrite: bool, example: str = "") -> Path:
+    """``path``, checked before any work as the file a command writes: not an existing file
+    (unless ``overwrite``), not a folder (``example``: a file name to suggest instead).
+
+    Raises:
+        InputError: naming the file.
+    """
+    if path.exists() and not overwrite:
+        raise InputError("the file exists; give --force to overwrite it", source=path)
+    if path.is_dir():
+        raise InputError(f"is a folder; give a file name{example}", source=path)
+    return path
 
 
 def write_new_file(path: Path, text: str, overwrite: bool = False) -> None:

@@ -16,6 +16,7 @@ from .common import (
     UNCERTAINTY_HELP,
     add_certificate_arguments,
     add_output_arguments,
+    add_scenario_argument,
     count,
     joint_units,
     json_text,
@@ -25,6 +26,7 @@ from .common import (
     positive_float,
     positive_int,
     print_json,
+    scenario_or_robot,
     show_progress,
     warn_uncertified,
     write_error,
@@ -93,12 +95,7 @@ def register(commands) -> None:
 def add_scenario_arguments(p, simulate: bool = True) -> None:
     """The scenario and its overrides, shared by ``simulate`` and ``certify``; ``simulate=False``
     leaves out what only a run needs (true plant, controller, plant backend, seed, torque limit)."""
-    p.add_argument(
-        "scenario",
-        nargs="?",
-        metavar="SCENARIO",
-        help="scenario YAML file or shipped name (rr_planar/s1_ic1 ...); omit with --robot",
-    )
+    add_scenario_argument(p)
     source = p.add_argument_group("robot and knowledge (replace or stand in for a scenario file)")
     source.add_argument("--robot", metavar="ROBOT", help=ROBOT_HELP)
     source.add_argument("--lock", type=names, metavar="JOINTS", help=LOCK_HELP + " (at 0)")
@@ -244,45 +241,19 @@ def run_simulate(args) -> int:
 def scenario_from_arguments(args):
     """The scenario of a ``simulate`` command line: the file (or a robot and its box) with every
     given flag as an override (:meth:`urpc.studies.scenario.Scenario.with_overrides`)."""
-    from ..model.catalog import default_uncertainty, resolve_robot
-    from ..model.urdf import robot_display_name
-    from ..studies.scenario import load_scenario, parse_scenario
-
-    uncertainty = args.uncertainty
-    if args.robot is not None and uncertainty is None:
-        resolve_robot(args.robot)  # an unknown name: say so, with the closest one
-        shipped = default_uncertainty(args.robot)
-        uncertainty = None if shipped is None else str(shipped)
-    if args.scenario is not None:
-        scenario = load_scenario(args.scenario)
-    elif args.robot is None:
-        raise InputError(
-            "give a scenario file (or a shipped name such as rr_planar/s2_ic1) or --robot",
-            field="scenario",
-        )
-    elif uncertainty is None:
-        raise InputError(
-            f"robot '{args.robot}' has no shipped uncertainty box; write one with "
-            f"'urpc init {args.robot} --out box.yaml' and give --uncertainty box.yaml "
-            "(format: docs/uncertainty-format.md)",
-            field="uncertainty",
-        )
-    else:
-        scenario = parse_scenario({"robot": args.robot, "uncertainty": uncertainty})
-        scenario = scenario.with_overrides(name=robot_display_name(args.robot))
     torque_limit = args.torque_limit
     if torque_limit is not None and "," in torque_limit:
         torque_limit = names(torque_limit)
     interval = {"method": args.method, "sampled_law": args.sampled_law, "delay": args.delay}
     interval = {key: value for key, value in interval.items() if value is not None}
-    options = {"interval": interval} if interval else None
-    return scenario.with_overrides(
-        robot=args.robot if args.scenario is not None else None,
+    return scenario_or_robot(
+        args,
+        "rr_planar/s2_ic1",
+        box_help=" (format: docs/uncertainty-format.md)",
         locked_joints=args.lock,
-        uncertainty=uncertainty if args.scenario is not None else None,
         true_parameters=args.true_params,
         controller=args.controller,
-        controller_options=options,
+        controller_options={"interval": interval} if interval else None,
         plant=args.plant,
         epsilon=args.epsilon,
         sample_period="continuous" if args.continuous else args.sample_period,

@@ -1,9 +1,10 @@
 """The input file formats, each declared once as a typed schema (pydantic).
 
 One module per format: :mod:`.uncertainty` (uncertainty box), :mod:`.parameter_point` (a true
-plant), :mod:`.scenario`, :mod:`.module` and :mod:`.assembly` (modular arms). The value grammar
-(numbers as arithmetic, vectors, interval notations) is in :mod:`.values`, and :mod:`.base` turns
-validation errors into :class:`urpc.errors.InputError` naming the file and the field. The JSON
+plant), :mod:`.scenario` (its controllers' options in :mod:`.controller_options`), :mod:`.module`
+and :mod:`.assembly` (modular arms). The value grammar (numbers as arithmetic, vectors, values of
+several forms, interval notations) is in :mod:`.values`, and :mod:`.base` turns validation errors
+into :class:`urpc.errors.InputError` naming the file and the field. The JSON
 Schemas in ``docs/schemas/`` are generated from these models (:func:`json_schemas`).
 
 This layer depends only on :mod:`urpc.errors` and :mod:`urpc.expressions`: the robot model, the
@@ -20,14 +21,14 @@ from pydantic import BaseModel
 from .assembly import AssemblyFile
 from .module import ModuleFile
 from .parameter_point import ParameterPointFile
-from .scenario import ScenarioFile
+from .scenario import Scenario
 from .uncertainty import UncertaintyFile
 
 #: Every format by the name of its JSON Schema file (``docs/schemas/<name>.schema.json``).
 FORMATS: dict[str, type[BaseModel]] = {
     "uncertainty": UncertaintyFile,
     "parameter-point": ParameterPointFile,
-    "scenario": ScenarioFile,
+    "scenario": Scenario,
     "module": ModuleFile,
     "assembly": AssemblyFile,
 }

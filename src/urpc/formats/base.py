@@ -8,13 +8,14 @@ found and what is valid (with "did you mean" for a misspelt key or choice).
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Annotated, Any, TypeVar
 
 import yaml
-from pydantic import BaseModel, ConfigDict, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model, model_validator
 from pydantic.fields import FieldInfo
 
 from ..errors import InputError, did_you_mean
@@ -158,6 +159,35 @@ def validate(
         return schema.model_validate({} if document is None else document, context=context)
     except ValidationError as exc:
         raise input_error(exc, document, schema, source, hints) from None
+
+
+def validate_fields(
+    schema: type[FileFormat],
+    values: Mapping[str, Any],
+    source: str | Path | None = None,
+    context: Mapping[str, Any] | None = None,
+) -> dict[str, Any]:
+    """Some top-level entries of a ``schema`` document, checked as in a whole document (unknown
+    keys, values, nested models; errors as :func:`validate`'s), by field name.
+
+    The entries left out are not required, and the checks of ``schema`` that combine its fields
+    are not run: the caller checks the model the values go into.
+    """
+    partial = validate(_partial(schema), values, source, context)
+    return {name: getattr(partial, name) for name in partial.model_fields_set}
+
+
+@functools.cache
+def _partial(schema: type[FileFormat]) -> type[FileFormat]:
+    """``schema``'s fields, each optional, without the model's own validators."""
+    fields = {
+        name: (
+            Annotated[(field.annotation, *field.metadata)] if field.metadata else field.annotation,
+            Field(None, alias=field.alias, title=field.title),
+        )
+        for name, field in schema.model_fields.items()
+    }
+    return create_model(schema.__name__, __base__=FileFormat, **fields)
 
 
 def input_error(

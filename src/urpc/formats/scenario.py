@@ -1,14 +1,18 @@
 """The scenario file: everything one simulation run needs.
 
-Documented in ``docs/scenarios.md``; read by :func:`urpc.studies.scenario.load_scenario`. Paths are
-resolved against ``context["base"]`` (the scenario's folder) and must exist. The names of the
-controllers, bound methods, plants and trajectories are declared here; tests check them against
-the registries of :mod:`urpc.bounds`, :mod:`urpc.sim.plants` and :mod:`urpc.trajectories`.
+Documented in ``docs/scenarios.md``. :class:`Scenario` is both the file's format and the
+settings the package runs: :func:`urpc.studies.scenario.load_scenario` reads one,
+:meth:`Scenario.with_overrides` makes a changed copy (each value checked like the file's, the
+combination on the copy) and :func:`urpc.studies.scenario.build` turns it into the objects of a
+run. Paths are resolved against ``context["base"]`` (the scenario's folder) and must exist;
+``context["source"]`` is the file (:attr:`Scenario.source`, whose stem names a scenario without a
+``name``). The controllers' options are in :mod:`.controller_options`. The names of the
+controllers, bound methods, plants and trajectories come from :mod:`urpc.names`; tests check them
+against the registries of :mod:`urpc.bounds`, :mod:`urpc.sim.plants` and :mod:`urpc.trajectories`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union, get_args
 
@@ -17,6 +21,7 @@ from pydantic import (
     BeforeValidator,
     Discriminator,
     Field,
+    PrivateAttr,
     Tag,
     ValidationInfo,
     WithJsonSchema,
@@ -24,35 +29,16 @@ from pydantic import (
 )
 
 from .. import names
-from ..errors import did_you_mean
-from .base import FieldError, FileFormat
-from .values import Count, NonNegative, Number, Positive, PositiveCount, Text, Vector
+from ..errors import InputError, did_you_mean
+from ..wording import count
+from .base import FieldError, FileFormat, validate_fields
+from .controller_options import ControllerOptions
+from .values import Count, NonNegative, Number, Positive, Text, Vector, either
 
 # The fixed sets, from the one place that names them (urpc.names).
 ControllerName = Literal[names.CONTROLLERS]
-BoundMethodName = Literal[names.BOUND_METHODS]
 PlantBackend = Literal[names.PLANT_BACKENDS]
 TrajectoryKind = Literal[names.TRAJECTORY_KINDS]
-#: How a sampled interval controller runs: ``implicit`` (the sampled-data law) or ``paper`` (the
-#: paper's law unchanged).
-SampledLaw = Literal[names.SAMPLED_LAWS]
-
-
-def _form(value: Any) -> str:
-    if isinstance(value, list | tuple):
-        return "list"
-    return "mapping" if isinstance(value, Mapping) else "scalar"
-
-
-def _either(expected: str, scalar: Any = None, mapping: Any = None, array: Any = None) -> Any:
-    """The forms of one value told apart by its YAML type (a text or number, a mapping, a list),
-    so that a wrong value gets the one message of the form it has."""
-    forms = {"scalar": scalar, "mapping": mapping, "list": array}
-    members = tuple(Annotated[kind, Tag(tag)] for tag, kind in forms.items() if kind is not None)
-    return Annotated[
-        Union[members],  # noqa: UP007 - built from a tuple
-        Discriminator(_form, custom_error_type="form", custom_error_message=f"expected {expected}"),
-    ]
 
 
 def resolve_file(value: Any, info: ValidationInfo, what: str, alternatives: str = "") -> Path:
@@ -89,105 +75,7 @@ def _all_positive(values: tuple[float, ...]) -> tuple[float, ...]:
 
 
 _VECTOR = "a number or a list of numbers, one per joint"
-ScalarOrVector = _either(_VECTOR, scalar=Number, array=Vector)
-#: A gain: a number, a diagonal (one per joint) or a matrix (list of rows).
-Gain = _either(
-    "a number, a list (diagonal) or a list of rows (matrix)",
-    scalar=Positive("SI"),
-    array=Annotated[
-        Annotated[Vector, Tag("diagonal")] | Annotated[tuple[Vector, ...], Tag("rows")],
-        Discriminator(lambda v: "rows" if v and isinstance(v[0], list | tuple) else "diagonal"),
-    ],
-)
-
-
-# ---------------------------------------------------------------------------- controllers
-class IntervalOptions(FileFormat):
-    """Keyword arguments of :func:`urpc.control.synthesis.synthesize` (the sample period is the
-    scenario's own)."""
-
-    method: BoundMethodName | None = Field(
-        None, title="bound method", description="default: by box kind (urpc.bounds.METHODS)"
-    )
-    kappa_P: Positive("s/rad") | None = Field(None, description="[s/rad], >= 1 (2)")
-    kappa_I: Positive("1/rad^2") | None = Field(None, description="[1/rad^2] (1)")
-    phi_P: Positive("N m s/rad") | None = Field(None, description="[N m s/rad], >= 1 (1)")
-    phi_I: Positive("N m/rad^2") | None = Field(None, description="[N m/rad^2] (1e6)")
-    Kr: Gain | None = Field(None, description="[1/s]; default 3/sqrt(epsilon)")
-    sampled_law: SampledLaw = Field(
-        "implicit",
-        description="sampled runs: implicit (the sampled-data law) or paper (the paper's law "
-        "unchanged)",
-    )
-    delay: Literal[0, 1] = Field(
-        0,
-        description="samples between a state and the period its torque acts over: 0, or 1 (the "
-        "law predicts one period ahead; urpc.control.delay)",
-    )
-
-
-def _betas_word(value: Any) -> Any:
-    if value not in ("estimate", "paper"):
-        raise ValueError(f"{value!r} is not 'estimate' or 'paper', nor a mapping of beta0..beta3")
-    return value
-
-
-class Betas(FileFormat):
-    """The r-alpha bounds ``beta0..beta3`` [SI]."""
-
-    beta0: NonNegative("SI")
-    beta1: NonNegative("SI")
-    beta2: NonNegative("SI")
-    beta3: NonNegative("SI")
-
-
-class RAlphaOptions(FileFormat):
-    """Keyword arguments of :func:`urpc.control.r_alpha.synthesize_r_alpha`."""
-
-    r: Positive("rad/s") | None = Field(None, description="[rad/s] (1e-2)")
-    alpha: Positive("1/s") | None = Field(None, description="[1/s] (1)")
-    Lambda: Gain | None = Field(None, description="[1/s]")
-    Q: Gain | None = Field(None, description="[N m s/rad]")
-    eta: Positive("N m rad/s") | None = Field(None, description="[N m rad/s]")
-    betas: (
-        _either(
-            "'estimate', 'paper' or a mapping of beta0..beta3",
-            scalar=Annotated[Literal["estimate", "paper"], BeforeValidator(_betas_word)],
-            mapping=Betas,
-        )
-        | None
-    ) = Field(None, description="estimate (default), paper, or beta0..beta3")
-    n_samples: PositiveCount | None = Field(None, description="samples of the estimate (1e5)")
-    seed: Count | None = Field(None, description="seed of the estimate (0)")
-    disturbance_bound: NonNegative("N m") | None = Field(
-        None, description="the bound the designer assumes [N m]"
-    )
-    q_range: Vector | None = Field(None, description="[low, high] of q in the estimate [rad]")
-
-    @model_validator(mode="after")
-    def _range(self) -> RAlphaOptions:
-        if self.q_range is not None and (
-            len(self.q_range) != 2 or self.q_range[0] > self.q_range[1]
-        ):
-            raise FieldError(
-                "q_range", f"{list(self.q_range)}: expected [low, high] [rad] with low <= high"
-            )
-        return self
-
-
-class ComputedTorqueOptions(FileFormat):
-    """Keyword arguments of :func:`urpc.control.computed_torque.synthesize_computed_torque`."""
-
-    natural_frequency: Positive("rad/s") | None = Field(None, description="[rad/s] (10)")
-    damping: Positive("1") | None = Field(None, description="damping ratio (1)")
-
-
-class ControllerOptions(FileFormat):
-    """The options of each controller; only those of the controller that runs are used."""
-
-    interval: IntervalOptions | None = None
-    r_alpha: RAlphaOptions | None = Field(None, alias="r-alpha")
-    computed_torque: ComputedTorqueOptions | None = Field(None, alias="computed-torque")
+ScalarOrVector = either(_VECTOR, scalar=Number, array=Vector)
 
 
 # ---------------------------------------------------------------------------- trajectories
@@ -271,7 +159,7 @@ class WaypointsTrajectory(FileFormat):
     acceleration_limit: ScalarOrVector | None = Field(None, description="[rad/s^2] (5)")
 
 
-Trajectory = _either(
+Trajectory = either(
     "a kind (paper, sinusoid, quintic) or a mapping with kind and options (also file, waypoints)",
     scalar=Annotated[TrajectoryKind, BeforeValidator(_kind)],
     mapping=Annotated[
@@ -320,36 +208,51 @@ _POINT_FILE = _file(
     "; give a file, 'sample' or 'nominal'",
     {"type": "string", "not": {"enum": list(_WORDS)}, "description": "a parameter-point file"},
 )
-TrueParameters = _either(
+TrueParameters = either(
     "a parameter-point file, 'sample', 'nominal', {file: ...} or {sample: {seed: ...}}",
     scalar=Annotated[
         Annotated[Literal["sample", "nominal"], Tag("word")] | Annotated[_POINT_FILE, Tag("file")],
         Discriminator(lambda v: "word" if v in _WORDS else "file"),
     ],
     mapping=Annotated[
-        Annotated[ParameterFile, Tag("file")] | Annotated[SampledParameters, Tag("sample")],
+        Annotated[ParameterFile, AfterValidator(lambda v: v.file), Tag("file")]
+        | Annotated[SampledParameters, Tag("sample")],
         Discriminator(lambda v: "file" if "file" in v else "sample"),
     ],
 )
 
 
-_LockedJoints = _either(
+_LockedJoints = either(
     "a list of joint names or a mapping name: position [rad]",
     mapping=dict[str, Number],
     array=tuple[Text, ...],
 )
 
 
-class ScenarioFile(FileFormat):
-    """A scenario file (units in brackets; defaults as in :class:`urpc.studies.scenario.Scenario`)."""
+#: Where the values of :meth:`Scenario.with_overrides` come from, in error messages.
+OVERRIDE_SOURCE = "command-line override"
 
-    name: Text | None = Field(None, description="default: the file name without .yaml")
+
+def _default_name(name: str | None, info: ValidationInfo) -> str:
+    source = (info.context or {}).get("source")
+    return name or (Path(source).stem if source is not None else "scenario")
+
+
+class Scenario(FileFormat):
+    """A scenario file (units in brackets): the settings of one simulation run, validated and
+    frozen, with paths made absolute."""
+
+    _source: Path | None = PrivateAttr(None)
+
+    name: Annotated[Text | None, AfterValidator(_default_name)] = Field(
+        None, validate_default=True, description="default: the file name without .yaml"
+    )
     description: Text = Field("", description="free text")
     robot: Annotated[Text, AfterValidator(_robot)] = Field(
         description="a built-in or example-robot-data name, or a URDF path"
     )
-    locked_joints: _LockedJoints | None = Field(
-        None, description="joint names (locked at 0) or name: position [rad or m]"
+    locked_joints: _LockedJoints = Field(
+        (), description="joint names (locked at 0) or name: position [rad or m]"
     )
     uncertainty: _file("uncertainty") = Field(
         description="the uncertainty file: what the controller knows"
@@ -358,7 +261,7 @@ class ScenarioFile(FileFormat):
         "sample", description="a parameter-point file, sample, {sample: {seed: 7}} or nominal"
     )
     trajectory: Trajectory = Field("sinusoid", description="a kind, or kind and options")
-    initial_condition: _either(
+    initial_condition: either(
         "at_reference or a mapping of q0, qd0, offset",
         scalar=Literal["at_reference"],
         mapping=InitialState,
@@ -376,7 +279,7 @@ class ScenarioFile(FileFormat):
     )
     duration: Positive("s") = Field(10.0, description="simulated time [s]")
     seed: Count = Field(0, description="seed of the disturbance draws (and of a sampled plant)")
-    torque_limit: _either(
+    torque_limit: either(
         "a number > 0 [N m], 'none' or a list, one per joint",
         scalar=Positive("N m", keyword="none"),
         array=Annotated[Vector, AfterValidator(_all_positive)],
@@ -388,3 +291,99 @@ class ScenarioFile(FileFormat):
         "(sampled runs); default: the interval law's delay (controller_options.interval.delay), "
         "else 0",
     )
+
+    def model_post_init(self, context: Any) -> None:
+        source = (context or {}).get("source")
+        self._source = None if source is None else Path(source)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Scenario:
+        """The checks that combine fields, of a file and of every override."""
+        period = self.sample_period
+        if period is not None and period > self.duration:
+            raise FieldError(
+                "sample_period",
+                f"the sample period {period:g} s is longer than the duration {self.duration:g} s",
+            )
+        if period is None and self.plant != "pinocchio":
+            raise FieldError(
+                "plant",
+                f"the {self.plant} plant steps under a held torque: give a sample_period [s], or "
+                "use plant: pinocchio for continuous time",
+            )
+        if period is None and self.actuation_delay:
+            raise FieldError(
+                "actuation_delay",
+                f"an actuation delay of {count(self.actuation_delay, 'sample')} needs samples: "
+                "give a sample_period [s], or set actuation_delay to 0 for continuous time",
+            )
+        if period is None and self.disturbance > 0:
+            raise FieldError(
+                "disturbance",
+                "the disturbance is drawn once per control sample: give a sample_period [s] or "
+                "set disturbance to 0 for continuous time",
+            )
+        return self
+
+    @property
+    def source(self) -> Path | None:
+        """The file the scenario was read from."""
+        return self._source
+
+    @property
+    def continuous(self) -> bool:
+        return self.sample_period is None
+
+    @property
+    def options(self) -> dict[str, Any]:
+        """The options of the controller that runs (keyword arguments of its synthesis)."""
+        return self.controller_options.by_controller()[self.controller]
+
+    @property
+    def true_parameter_seed(self) -> int | None:
+        """The seed of a sampled true plant: its own, else the scenario's ``seed``; ``None``
+        when the true parameters are a file or the nominal ones."""
+        true = self.true_parameters
+        if isinstance(true, SampledParameters):
+            return self.seed if true.sample is None else true.sample.seed
+        return self.seed if true == "sample" else None
+
+    def with_overrides(self, **values: Any) -> Scenario:
+        """A copy with some fields replaced; ``None`` values are ignored (flags not given).
+
+        Values are validated like file entries; relative paths are resolved against the current
+        directory. ``controller_options`` entries are merged per controller.
+
+        Raises:
+            InputError: an unknown field (with the closest name) or an invalid value.
+        """
+        given = {key: value for key, value in values.items() if value is not None}
+        update = validate_fields(Scenario, given, OVERRIDE_SOURCE, context={"base": Path.cwd()})
+        if "controller_options" in update:
+            update["controller_options"] = self.controller_options.merged(
+                update["controller_options"]
+            )
+        try:
+            return self.model_copy(update=update)._consistent()
+        except FieldError as exc:
+            raise InputError(str(exc), OVERRIDE_SOURCE, exc.path[0]) from None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data (YAML/JSON-ready) with every key of the scenario file; paths absolute."""
+        document = self.model_dump(mode="json")
+        seed = self.true_parameter_seed
+        if seed is not None:
+            document["true_parameters"] = {"sample": {"seed": seed}}
+        trajectory = self.trajectory
+        document["trajectory"] = (
+            {"kind": trajectory}
+            if isinstance(trajectory, str)
+            else {"kind": trajectory.kind, **trajectory.model_dump(mode="json", exclude_unset=True)}
+        )
+        ic = document["initial_condition"]
+        if isinstance(ic, dict):
+            document["initial_condition"] = {k: v for k, v in ic.items() if v} or "at_reference"
+        if self.sample_period is None:
+            document["sample_period"] = "continuous"
+        document["controller_options"] = self.controller_options.by_controller("json")
+        return document

@@ -1,5 +1,6 @@
 """The values the file formats are made of: numbers written as plain arithmetic, vectors, names,
-and the interval notations of uncertainty boxes (``[lo, hi]``, ``10%``, ``+-0.05``, ...).
+values of several forms (:func:`either`) and the interval notations of uncertainty boxes
+(``[lo, hi]``, ``10%``, ``+-0.05``, ...).
 
 Each is an annotated type: a validator that parses what YAML gives (numbers, or text that
 :func:`urpc.expressions.evaluate` reads) with one clear message, and the JSON Schema of the
@@ -9,10 +10,18 @@ accepted input, so that editors accept ``5/12`` or ``10%`` where a number or an 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, Union
 
-from pydantic import BeforeValidator, ValidationInfo, WithJsonSchema
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    Discriminator,
+    Tag,
+    ValidationInfo,
+    WithJsonSchema,
+)
 
 from ..expressions import ExpressionOverflow, evaluate
 
@@ -135,6 +144,24 @@ def _text(value: Any) -> str:
 
 #: Free text (numbers are read as their text).
 Text = Annotated[str, BeforeValidator(_text), WithJsonSchema({"type": ["string", "number"]})]
+
+
+def _form(value: Any) -> str:
+    if isinstance(value, list | tuple):
+        return "list"
+    # A model is a mapping once validated (when the value is serialized).
+    return "mapping" if isinstance(value, Mapping | BaseModel) else "scalar"
+
+
+def either(expected: str, scalar: Any = None, mapping: Any = None, array: Any = None) -> Any:
+    """The forms of one value told apart by its YAML type (a text or number, a mapping, a list),
+    so that a wrong value gets the one message of the form it has."""
+    forms = {"scalar": scalar, "mapping": mapping, "list": array}
+    members = tuple(Annotated[kind, Tag(tag)] for tag, kind in forms.items() if kind is not None)
+    return Annotated[
+        Union[members],  # noqa: UP007 - built from a tuple
+        Discriminator(_form, custom_error_type="form", custom_error_message=f"expected {expected}"),
+    ]
 
 
 # ---------------------------------------------------------------------------- intervals

@@ -39,6 +39,15 @@ class InfeasibleData(InputError):
     """No parameter vector of the prior box explains the data within the noise bound."""
 
 
+def _infeasible() -> InfeasibleData:
+    return InfeasibleData(
+        "no parameter vector in the prior box explains the data within the noise bound: the "
+        "noise bound is too small, the prior box too narrow, or the data do not belong to this "
+        "robot (joint order, units, torque sign)",
+        field="torque_noise",
+    )
+
+
 @dataclass
 class Polytope:
     """``{x : A_ub x <= b_ub, A_eq x = b_eq, lower <= x <= upper}`` (finite bounds)."""
@@ -86,13 +95,7 @@ class Polytope:
             reach = np.sum(np.abs(A), axis=1)
             if inequality:
                 if np.any(b < -reach - 1e-9 * (1 + np.abs(b))):
-                    raise InfeasibleData(
-                        "no parameter vector in the prior box explains the data within the "
-                        "noise bound: the noise bound is too small, the prior box too narrow, "
-                        "or the data do not belong to this robot (joint order, units, torque "
-                        "sign)",
-                        field="torque_noise",
-                    )
+                    raise _infeasible()
                 keep = b < reach
             else:
                 keep = reach > 0
@@ -105,33 +108,19 @@ class Polytope:
 
     def _solve(self, cost: np.ndarray, A_ub, b_ub, A_eq, b_eq, bounds, what: str):
         self.solves += 1
-        result = linprog(
-            cost,
-            A_ub=A_ub if A_ub.shape[0] else None,
-            b_ub=b_ub if A_ub.shape[0] else None,
-            A_eq=A_eq if A_eq.shape[0] else None,
-            b_eq=b_eq if A_eq.shape[0] else None,
-            bounds=bounds,
-            method="highs",
-        )
+        program = {
+            "A_ub": A_ub if A_ub.shape[0] else None,
+            "b_ub": b_ub if A_ub.shape[0] else None,
+            "A_eq": A_eq if A_eq.shape[0] else None,
+            "b_eq": b_eq if A_eq.shape[0] else None,
+            "bounds": bounds,
+            "method": "highs",
+        }
+        result = linprog(cost, **program)
         if result.status == 2:  # confirm without presolve (it can misjudge near-degenerate rows)
-            result = linprog(
-                cost,
-                A_ub=A_ub if A_ub.shape[0] else None,
-                b_ub=b_ub if A_ub.shape[0] else None,
-                A_eq=A_eq if A_eq.shape[0] else None,
-                b_eq=b_eq if A_eq.shape[0] else None,
-                bounds=bounds,
-                method="highs",
-                options={"presolve": False},
-            )
+            result = linprog(cost, **program, options={"presolve": False})
         if result.status == 2:
-            raise InfeasibleData(
-                "no parameter vector in the prior box explains the data within the noise bound: "
-                "the noise bound is too small, the prior box too narrow, or the data do not "
-                "belong to this robot (joint order, units, torque sign)",
-                field="torque_noise",
-            )
+            raise _infeasible()
         if result.status == 3:
             return None  # unbounded (only the ratio program can be: the caller says what then)
         if result.status != 0:

@@ -21,8 +21,8 @@ from .draws import RunSpec
 
 @dataclass(frozen=True)
 class RunTask:
-    """One run as shipped to a worker: plain data only (a Scenario holds mappingproxies, which
-    do not pickle, so the scenario travels as its document and is re-parsed once per worker)."""
+    """One run as shipped to a worker: plain data only (the scenario travels as its document,
+    which also keys the worker's cache of built setups, and is re-parsed once per worker)."""
 
     document: str
     source: str | None
@@ -72,7 +72,7 @@ def run_one(task: RunTask) -> RunOutcome:
     point = {name: np.array(values) for name, values in spec.point.items()}
     run_setup = dataclasses.replace(
         setup,
-        scenario=dataclasses.replace(setup.scenario, seed=spec.seed),
+        scenario=setup.scenario.model_copy(update={"seed": spec.seed}),
         plant=setup.box.plant(setup.robot, point),
         true_point=point,
         true_description=f"campaign run {spec.index} ({spec.kind} of the box)",

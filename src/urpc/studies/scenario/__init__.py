@@ -1,11 +1,13 @@
 """Scenario files: everything one simulation run needs, in one YAML file.
 
 Settings (:mod:`.settings`: :func:`load_scenario` validates a file into a frozen
-:class:`Scenario`), building (:mod:`.setup`: :func:`build` makes the robot, the box, the true
-plant, the trajectory and the initial state) and running (:mod:`.run`: :func:`build_controller`
-synthesizes, :func:`run_scenario` simulates), each separate from the others.
+:class:`Scenario`, the model of :mod:`urpc.formats.scenario`), building (:mod:`.setup`:
+:func:`build` makes the robot, the box, the true plant, the trajectory and the initial state) and
+running (:mod:`.run`: :func:`build_controller` synthesizes, :func:`run_scenario` simulates), each
+separate from the others.
 """
 
+from ...formats.scenario import Scenario
 from .run import (
     build_controller,
     interval_synthesis_options,
@@ -17,10 +19,6 @@ from .settings import (
     CONTROLLERS,
     PLANT_BACKENDS,
     SCENARIO_KEYS,
-    InitialCondition,
-    Scenario,
-    TrajectorySpec,
-    TrueParameters,
     load_scenario,
     parse_scenario,
     shipped_scenarios,
@@ -31,11 +29,8 @@ __all__ = [
     "CONTROLLERS",
     "PLANT_BACKENDS",
     "SCENARIO_KEYS",
-    "InitialCondition",
     "Scenario",
     "ScenarioSetup",
-    "TrajectorySpec",
-    "TrueParameters",
     "build",
     "build_controller",
     "describe_point",

@@ -8,9 +8,10 @@ from typing import Any
 
 from ...control.base import Controller
 from ...errors import InputError, did_you_mean
-from ...formats.scenario import IntervalOptions
+from ...formats.controller_options import IntervalOptions
+from ...formats.scenario import Scenario
 from ...model.parameter_box import JOINTS, joint_values, link_points
-from .settings import CONTROLLERS, Scenario
+from .settings import CONTROLLERS
 from .setup import ScenarioSetup, build
 
 
@@ -19,7 +20,7 @@ def interval_synthesis_options(scenario: Scenario) -> dict[str, Any]:
     ``interval`` options: ``sample_period`` is the scenario's (``None`` for continuous time) and
     ``sampled_law`` the option's (``implicit`` by default, ``paper`` for the paper's law
     unchanged)."""
-    options = dict(scenario.controller_options["interval"])
+    options = scenario.controller_options.by_controller()["interval"]
     options.setdefault("sampled_law", IntervalOptions.model_fields["sampled_law"].default)
     options["sample_period"] = scenario.sample_period
     return options
@@ -45,7 +46,7 @@ def build_controller(setup: ScenarioSetup, controller: str | None = None) -> Con
         raise InputError(
             f"unknown controller '{name}'; " + did_you_mean(name, CONTROLLERS), source, "controller"
         )
-    options = dict(scenario.controller_options[name])
+    options = scenario.controller_options.by_controller()[name]
     try:
         if name == "interval":
             from ...control.synthesis import synthesize

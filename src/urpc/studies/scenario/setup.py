@@ -1,6 +1,6 @@
 """Building a scenario: the robot, the box, the true plant, the trajectory and the initial state.
 
-:func:`build` turns the settings of a :class:`~urpc.studies.scenario.settings.Scenario` into the
+:func:`build` turns the settings of a :class:`~urpc.formats.scenario.Scenario` into the
 objects a run needs (a :class:`ScenarioSetup`), checking what needs the robot (vector lengths,
 joint limits, link names) and naming the scenario file and the field in every error.
 """
@@ -11,11 +11,14 @@ import math
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ...errors import InputError
+from ...formats.base import FileFormat
+from ...formats.scenario import InitialState, Scenario
 from ...model.parameter_box import joint_values, link_points
 from ...model.parameter_point import box_excursions as parameter_excursions
 from ...model.parameter_point import sample_rigid_point
@@ -28,7 +31,6 @@ from ...trajectories import (
     Trajectory,
     generic_trajectory,
 )
-from .settings import Scenario, TrajectorySpec
 
 
 class OutsideBoxWarning(UserWarning):
@@ -101,6 +103,8 @@ def build(scenario: Scenario) -> ScenarioSetup:
     trajectory = _trajectory(scenario.trajectory, nominal, source)
     reference = trajectory.reference(0.0)
     ic = scenario.initial_condition
+    if isinstance(ic, str):  # at_reference
+        ic = InitialState()
     q0 = reference.q + _fit(ic.offset, nominal.dof, source, "initial_condition.offset")
     if ic.q0 is not None:
         q0 = _fit(ic.q0, nominal.dof, source, "initial_condition.q0")
@@ -146,11 +150,11 @@ def _true_point(
     scenario: Scenario, robot: Robot, box: ParameterBox, source: str | None
 ) -> tuple[dict[str, np.ndarray], str]:
     true = scenario.true_parameters
-    if true.kind == "file":
-        return load_parameter_point(true.file, robot, box), f"true parameters from {true.file}"
-    if true.kind == "nominal":
+    if isinstance(true, Path):
+        return load_parameter_point(true, robot, box), f"true parameters from {true}"
+    if true == "nominal":
         return {}, "true parameters = nominal parameters (no model error)"
-    seed = scenario.seed if true.seed is None else true.seed
+    seed = scenario.true_parameter_seed
     point, rejected = _sampled(box, seed, source)
     rejections = f"; {rejected} draws that were no rigid body rejected" if rejected else ""
     return point, (
@@ -197,15 +201,17 @@ def _sampled(
         raise InputError(exc.detail, source=source, field="true_parameters") from None
 
 
-def _trajectory(spec: TrajectorySpec, robot: Robot, source: str | None) -> Trajectory:
-    options = dict(spec.options)
+def _trajectory(spec: str | FileFormat, robot: Robot, source: str | None) -> Trajectory:
+    """The trajectory of a scenario's ``trajectory``: a kind, or a kind's model and its options."""
+    kind = spec if isinstance(spec, str) else spec.kind
+    options = {} if isinstance(spec, str) else spec.model_dump(exclude_unset=True, exclude={"kind"})
     dof = robot.dof
-    if spec.kind in ("file", "waypoints"):
+    if kind in ("file", "waypoints"):
         from ...trajectory_sources import planned_trajectory
 
-        return planned_trajectory(spec.kind, options, robot, source)
+        return planned_trajectory(kind, options, robot, source)
     try:
-        if spec.kind == "paper":
+        if kind == "paper":
             amplitude = options.get("amplitude", (math.pi / 4, -math.pi / 8))
             if len(amplitude) != dof:
                 raise InputError(
@@ -224,8 +230,8 @@ def _trajectory(spec: TrajectorySpec, robot: Robot, source: str | None) -> Traje
         }
         if "home" in knobs:
             knobs["home"] = _fit(knobs["home"], dof, source, "trajectory.home")
-        generic = generic_trajectory(robot, spec.kind, **knobs)
-        if spec.kind == "sinusoid":
+        generic = generic_trajectory(robot, kind, **knobs)
+        if kind == "sinusoid":
             assert isinstance(generic, SinusoidTrajectory)
             values = {
                 key: _fit(options.get(key, getattr(generic, key)), dof, source, f"trajectory.{key}")
