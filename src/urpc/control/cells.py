@@ -9,22 +9,21 @@ rates, the Slotine-Li regressor and its rate, Coriolis matrices of every plant o
 quantity is taken at a point of the reference: nothing can slip between grid points, whatever the
 reference, the period or the duration.
 
-The bounds over one cell (inertia models, the norms of the mismatch, the Coriolis matrix of
-every plant) are in :mod:`urpc.control.cell_bounds`; the one-period floor over the cells'
-enclosures is :mod:`urpc.control.period_bound`.
+The bounds over one cell are in :mod:`urpc.control.cell_bounds`, the drives' terms in
+:mod:`urpc.control.sampled_joints`, the box's pieces in :mod:`urpc.control.box_pieces`; the
+one-period floor over the cells' enclosures is :mod:`urpc.control.period_bound`.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 
 from ..model.inertia_bounds import InertiaBounds
 from ..model.regressor_balls import Ball, BallRegressor, Jet, matvec, parameters_of
-from ..model.uncertainty import ParameterBox
 from ..trajectories import Trajectory
+from .box_pieces import split_box
 from .cell_bounds import (
     LAPACK_MARGIN,
     InertiaModel,
@@ -39,8 +38,6 @@ from .cell_bounds import (
 from .interval import IntervalPassivityController
 from .sampled_joints import JointTerms
 
-#: At most this many pieces of the box (the cost grows linearly with it).
-PIECES = 4
 #: Cells are cut so that the reference moves at most this far [rad] per joint within one.
 CELL_MOTION = 0.01
 #: Bounds on the number of cells.
@@ -140,8 +137,8 @@ class CellFloor:
             np.sum(reference_velocity.magnitude * slopes, axis=-1), slopes, 0.0, ed, ed_norm
         ) / (1 - np.minimum(law.eps, 0.999999))
         # Drives: smooth terms per component (values and rates), and the drive torque's rate.
-        drive, drive_rate = self._drive_terms(qd_a, qdd_a)
-        torque_rate_max = enclosed["torque_rate"] + self._drive_torque_rate(qd_a, qdd_a)
+        drive, drive_rate = self.joints.mismatch(qd_a, qdd_a) or (None, None)
+        torque_rate_max = enclosed["torque_rate"] + self.joints.nominal_torque_rate(qd_a, qdd_a)
         out = dict(enclosed["global"], r_max=float(r_max), mu_law=law_rate_norm, pieces=[])
         for piece in enclosed["pieces"]:
             metrics = piece["metrics"]
@@ -220,7 +217,7 @@ class CellFloor:
         rigid = matvec(center, hull)
         rigid_along = matvec(tube_jacobian, hull)
         plant_torque = rigid.magnitude + tube * np.sqrt(np.sum(rigid_along.magnitude**2, axis=1))
-        plant_torque = plant_torque + self._drive_torque(qd_a, qdd_a)
+        plant_torque = plant_torque + self.joints.plant_torque(qd_a, qdd_a)
         # The law's nominal torque at r != 0 differs from its value at r = 0 by
         # M0 Kr r - C0(q, r) qd_a = M0 Kr r - C0(q, qd_a) r (+ Ia0 Kr r): per joint at most
         # (Kr ||M0 e_i|| + ||row_i C0(q, qd_a)|| + Ia0_i Kr) ||r||, with
@@ -234,9 +231,8 @@ class CellFloor:
         C0 = self.regressor.coriolis_matrices(q.val, qd_a.val, pi0.mid[None])[:, 0]
         rows_C0 = np.sqrt(np.sum(C0.magnitude**2, axis=-1))
         per_r = Kr_max * rows_M0 * (1 + LAPACK_MARGIN) + rows_C0
-        joints = self.controller.bound.joints
-        if joints is not None:
-            per_r = per_r + joints.nominal[0] * Kr_max
+        if self.joints.box is not None:
+            per_r = per_r + self.joints.box.nominal[0] * Kr_max
         enclosed = {
             "reference_velocity": reference_velocity,
             "law": law,
@@ -379,40 +375,6 @@ class CellFloor:
         jacobian = self.regressor.slotine_li(*jets).dot  # (cells, k, n, 10 n)
         return center, jacobian
 
-    def _drive_terms(self, qd_a: Jet, qdd_a: Jet):
-        """The drives' smooth mismatch at ``r = 0`` per component and its rate [N m, N m/s]."""
-        terms = self.joints
-        if terms.armature.size == 0:
-            return None, None
-        speed, acceleration = qd_a.val.magnitude, qdd_a.val.magnitude
-        value = terms.armature * acceleration + terms.viscous * speed
-        rate = terms.armature * qdd_a.dot.magnitude + terms.viscous * qd_a.dot.magnitude
-        return value, rate
-
-    def _drive_torque(self, qd_a: Jet, qdd_a: Jet) -> np.ndarray | float:
-        """``|Ia qdd_a + Dv qd_a + f_c|`` [N m] of every drive of the box at ``r = 0``."""
-        joints = self.controller.bound.joints
-        if joints is None:
-            return 0.0
-        upper = joints.upper
-        return upper[0] * qdd_a.val.magnitude + upper[1] * qd_a.val.magnitude + upper[2]
-
-    def _drive_torque_rate(self, qd_a: Jet, qdd_a: Jet) -> np.ndarray:
-        joints = self.controller.bound.joints
-        if joints is None:
-            return 0.0
-        return joints.nominal[0] * qdd_a.dot.magnitude + joints.nominal[1] * qd_a.dot.magnitude
-
-    def dominant_link(self, quantities: dict, piece: int, cell: int, tube: float):
-        """The uncertain link with the largest part of ``||M_L^-1 w||`` at a cell of a piece,
-        and that part's share, or ``None`` without uncertain links."""
-        parts = quantities["pieces"][piece]["R_links"]
-        if not len(parts):
-            return None
-        values = parts[:, 0, cell] + tube * parts[:, 1, cell]
-        k = int(np.argmax(values))
-        return self.pieces[piece].uncertain_links[k].link, float(values[k] / np.sum(values))
-
     def figures(self, quantities: dict) -> dict[str, float]:
         pieces = quantities["pieces"]
         return {
@@ -427,30 +389,3 @@ class CellFloor:
     def cell_time(self, cell: int) -> tuple[float, float]:
         """The time span [s] of a cell (before its widening)."""
         return float(self.edges[cell]), float(self.edges[cell + 1])
-
-
-def split_box(box: ParameterBox, pieces: int = PIECES) -> list[ParameterBox]:
-    """The box cut along its widest mass intervals (at most 3, relative to their upper end) into
-    at most ``pieces`` boxes whose union is the box."""
-    masses = [(link.upper[0] - link.lower[0]) / link.upper[0] for link in box.links]
-    order = [k for k in np.argsort(masses)[::-1] if masses[k] > 0][:3]
-    if not order:
-        return [box]
-    cuts = max(2, int(round(pieces ** (1.0 / len(order)))))
-    while cuts ** len(order) > pieces and len(order) > 1:
-        order = order[:-1]
-        cuts = max(2, int(round(pieces ** (1.0 / len(order)))))
-    result = [box]
-    for k in order:
-        split = []
-        for piece in result:
-            link = piece.links[k]
-            edges = np.linspace(link.lower[0], link.upper[0], cuts + 1)
-            for low, high in zip(edges[:-1], edges[1:], strict=True):
-                lower, upper = link.lower.copy(), link.upper.copy()
-                lower[0], upper[0] = low, high
-                links = list(piece.links)
-                links[k] = dataclasses.replace(link, lower=lower, upper=upper)
-                split.append(dataclasses.replace(piece, links=tuple(links)))
-        result = split
-    return result

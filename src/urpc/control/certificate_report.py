@@ -103,3 +103,14 @@ def lightest_joint(floor_of: CellFloor, quantities: dict, cell: int) -> int:
     """The joint whose diagonal of ``M_L^-1`` is largest at a cell (the lightest mode's joint)."""
     inverse = quantities["law_inverse_diagonal"][cell]
     return int(np.argmax(inverse))
+
+
+def dominant_link(floor_of: CellFloor, quantities: dict, piece: int, cell: int, tube: float):
+    """The uncertain link with the largest part of ``||M_L^-1 w||`` at a cell of a piece, and
+    that part's share, or ``None`` without uncertain links."""
+    parts = quantities["pieces"][piece]["R_links"]
+    if not len(parts):
+        return None
+    values = parts[:, 0, cell] + tube * parts[:, 1, cell]
+    k = int(np.argmax(values))
+    return floor_of.pieces[piece].uncertain_links[k].link, float(values[k] / np.sum(values))

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model.ball_arithmetic import Jet
 from ..model.joint_dynamics import JointBox
 
 
@@ -24,6 +25,7 @@ class JointTerms:
     """
 
     def __init__(self, joints: JointBox | None):
+        self.box = joints
         if joints is None:
             self.armature = self.viscous = np.zeros(0)
             self.damping = self.coulomb = 0.0
@@ -35,11 +37,26 @@ class JointTerms:
         #: ``||Fc_hi + Fc0||`` [N m]: the Coulomb mismatch, counted as disturbance.
         self.coulomb = float(np.linalg.norm(joints.upper[2] + joints.nominal[2]))
 
-    def smooth(self, qd: np.ndarray, qdd: np.ndarray, Kr: np.ndarray, tube: float) -> np.ndarray:
-        """``c`` [N m] per joint over the tube ``||e|| <= tube`` around the reference ``(qd, qdd)``
-        (``qd_a = qd + Kr e``, ``qdd_a = qdd - Kr^2 e`` at ``r = 0``)."""
+    def mismatch(self, qd_a: Jet, qdd_a: Jet) -> tuple[np.ndarray, np.ndarray] | None:
+        """The drives' smooth mismatch at ``r = 0`` per component and its rate [N m, N m/s]
+        over the cells' boxes of ``qd_a``, ``qdd_a`` (jets); ``None`` for rigid joints."""
         if self.armature.size == 0:
-            return np.zeros(len(Kr))
-        return self.armature * (np.abs(qdd) + Kr * Kr * tube) + self.viscous * (
-            np.abs(qd) + Kr * tube
-        )
+            return None
+        speed, acceleration = qd_a.val.magnitude, qdd_a.val.magnitude
+        value = self.armature * acceleration + self.viscous * speed
+        rate = self.armature * qdd_a.dot.magnitude + self.viscous * qd_a.dot.magnitude
+        return value, rate
+
+    def plant_torque(self, qd_a: Jet, qdd_a: Jet) -> np.ndarray | float:
+        """``|Ia qdd_a + Dv qd_a + f_c|`` [N m] of every drive of the box at ``r = 0``."""
+        if self.box is None:
+            return 0.0
+        upper = self.box.upper
+        return upper[0] * qdd_a.val.magnitude + upper[1] * qd_a.val.magnitude + upper[2]
+
+    def nominal_torque_rate(self, qd_a: Jet, qdd_a: Jet) -> np.ndarray | float:
+        """The rate [N m/s] of the nominal drives' torque ``Ia0 qdd_a + Dv0 qd_a``."""
+        if self.box is None:
+            return 0.0
+        nominal = self.box.nominal
+        return nominal[0] * qdd_a.dot.magnitude + nominal[1] * qd_a.dot.magnitude

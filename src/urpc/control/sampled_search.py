@@ -11,7 +11,7 @@ from collections.abc import Callable
 from typing import Any
 
 from .cells import CellFloor
-from .certificate_report import lightest_joint
+from .certificate_report import dominant_link, lightest_joint
 from .interval import IntervalPassivityController
 from .period_bound import PeriodBound
 
@@ -141,8 +141,8 @@ class SampledSearch:
             out["worst_time"] = floor_of.cell_time(cell)[0]
             lightest = lightest_joint(floor_of, quantities, cell)
             out["lightest_joint"] = floor_of.robot.joint_names[lightest]
-            link = floor_of.dominant_link(
-                quantities, parts.get("piece", 0), cell, parts.get("tube", self.epsilon)
+            link = dominant_link(
+                floor_of, quantities, parts.get("piece", 0), cell, parts.get("tube", self.epsilon)
             )
             if link is not None:
                 out["dominant_link"], out["dominant_link_share"] = link
