@@ -40,11 +40,11 @@ _LAZY = {
     "RobotInterface": (".robot.interface", "RobotInterface"),
     "RobotState": (".robot.interface", "RobotState"),
     "run_on_robot": (".robot.runner", "run"),
-    "FileTrajectory": (".trajectory_sources", "FileTrajectory"),
-    "WaypointTrajectory": (".trajectory_sources", "WaypointTrajectory"),
-    "StreamedReference": (".trajectory_sources", "StreamedReference"),
-    "from_samples": (".trajectory_sources", "from_samples"),
-    "load_samples": (".trajectory_sources", "load_samples"),
+    "FileTrajectory": (".trajectory_samples", "FileTrajectory"),
+    "WaypointTrajectory": (".trajectory_moves", "WaypointTrajectory"),
+    "StreamedReference": (".trajectory_moves", "StreamedReference"),
+    "from_samples": (".trajectory_samples", "from_samples"),
+    "load_samples": (".trajectory_files", "load_samples"),
     "identify": (".identify", "identify"),
     "Assembly": (".model.modular", "Assembly"),
     "assemble": (".model.modular", "assemble"),
@@ -176,10 +176,6 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
         generic_trajectory,
         home_configuration,
     )
-    from .trajectory_sources import (
-        FileTrajectory,
-        StreamedReference,
-        WaypointTrajectory,
-        from_samples,
-        load_samples,
-    )
+    from .trajectory_files import load_samples
+    from .trajectory_moves import StreamedReference, WaypointTrajectory
+    from .trajectory_samples import FileTrajectory, from_samples

@@ -121,7 +121,7 @@ def run_robot(args) -> int:
     from ..robot.watchdog import Watchdog
     from ..studies.scenario import build, load_scenario
     from ..studies.scenario.run import interval_synthesis_options
-    from ..trajectory_sources import Approach, segment_durations
+    from ..trajectory_moves import Approach, segment_durations
 
     address = parse_address(args.robot_address)
     out = None if args.out is None else check_writable(args.out)

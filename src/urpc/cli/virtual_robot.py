@@ -1,5 +1,5 @@
 """``urpc virtual-robot``: a plant that behaves like a torque-controlled arm, over UDP on
-127.0.0.1 (:mod:`urpc.robot.virtual`)."""
+127.0.0.1 (:mod:`urpc.robot.virtual_server`)."""
 
 from __future__ import annotations
 
@@ -164,7 +164,8 @@ def run_virtual_robot(args) -> int:
     from ..model.catalog import default_uncertainty
     from ..model.robot import load_robot
     from ..model.uncertainty import load_parameter_point, load_uncertainty
-    from ..robot.virtual import ArmOptions, VirtualArm, say, serve
+    from ..robot.virtual import ArmOptions, VirtualArm
+    from ..robot.virtual_server import say, serve
     from ..studies.scenario.setup import sample_true_parameters
 
     robot = load_robot(args.robot, args.lock)

@@ -138,7 +138,7 @@ class QuinticTrajectory(_Generic):
 
 class FileTrajectory(FileFormat):
     """Samples from a file (CSV or NPZ: ``t``, ``q`` per joint, optional ``qd``, ``qdd``),
-    interpolated C2 (:mod:`urpc.trajectory_sources`)."""
+    interpolated C2 (:mod:`urpc.trajectory_samples`)."""
 
     kind: Literal["file"]
     path: _file("trajectory") = Field(description="a .csv or .npz file of samples")

@@ -35,7 +35,7 @@ class ControlLoop:
     Args:
         controller: A synthesized controller (:func:`urpc.synthesize`, :func:`urpc.load_controller`).
         trajectory: The reference (:class:`urpc.Trajectory`, e.g. :func:`urpc.from_samples`, or a
-            :class:`~urpc.trajectories_streamed.StreamedReference` updated while the loop runs).
+            :class:`~urpc.trajectory_moves.StreamedReference` updated while the loop runs).
         period: The control period [s]; default: the controller's ``sample_period``.
         epsilon: The precision a run is judged against [rad]; default: the controller's.
         capacity: Rows the log holds before it grows.
