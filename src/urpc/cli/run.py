@@ -198,7 +198,7 @@ def run_robot(args) -> int:
         "ending": report.ending,
         "message": report.message,
         "approach_s": approach,
-        "delay": int(getattr(controller, "delay", 0)),
+        "delay": int(controller.delay),
         "velocity_filter_hz": args.velocity_filter,
         "cycles": report.cycles,
         "deadline_misses": report.watchdog["late_cycles"],

@@ -53,6 +53,8 @@ class Controller(ABC):
         diagnostic_units: Name -> unit of the scalars :meth:`diagnostics` returns (e.g.
             ``{"phi": "N m s/rad"}``), recorded by the simulator as named series; empty for
             laws with nothing to log.
+        delay: Samples of actuation delay the law predicts over (0: its torque acts over the
+            period of its own sample; 1: :class:`~urpc.control.delay.DelayedIntervalController`).
     """
 
     name: ClassVar[str]
@@ -63,6 +65,7 @@ class Controller(ABC):
     sample_period: float | None = None
     epsilon: float | None = None
     Kr: float | np.ndarray = 1.0
+    delay: int = 0
 
     def initial_state(self) -> np.ndarray:
         """The internal state at ``t = 0``."""
@@ -122,7 +125,7 @@ def actuation_delay_of(controller: Controller, value: Any = None) -> int:
             ``actuation_delay``).
     """
     if value is None:
-        return int(getattr(controller, "delay", 0))
+        return int(controller.delay)
     if isinstance(value, float) and value.is_integer():
         value = int(value)
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:

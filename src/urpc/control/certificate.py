@@ -168,7 +168,7 @@ def certify(
     box = controller.bound.box
     d = box.disturbance_bound if disturbance_bound is None else float(disturbance_bound)
     conditions = controller.gain_law.conditions()
-    law_delay = int(getattr(controller, "delay", 0))
+    law_delay = int(controller.delay)
     delay = max(law_delay, actuation_delay_of(controller, actuation_delay))
     if delay:  # the argument of docs/sampled-data.md §2 is for a torque acting at its sample
         late = count(delay, "sample")

@@ -114,7 +114,7 @@ def key_document(
         },
         "controller": {
             "class": _class_name(controller),
-            "delay": int(getattr(controller, "delay", 0)),
+            "delay": int(controller.delay),
             "epsilon": canonical(controller.epsilon),
             "kappa_P": canonical(controller.kappa_P),
             "kappa_I": canonical(controller.kappa_I),

@@ -84,7 +84,7 @@ def save_controller(controller, path: str | Path) -> Path:
             "Kr": controller.Kr.tolist(),
             "sample_period": controller.sample_period,
             "sampled_law": controller.sampled_law,
-            "delay": int(getattr(controller, "delay", 0)),
+            "delay": int(controller.delay),
         },
         "check": {
             "nominal_parameters": np.asarray(robot.nominal_parameters, dtype=float).tolist(),

@@ -78,8 +78,6 @@ class IntervalPassivityController(Controller):
     """
 
     name = "interval"
-    #: Samples of actuation delay the law predicts over (:mod:`urpc.control.delay` for 1).
-    delay = 0
     diagnostic_units = {"phi": "N m s/rad", "kappa": "s/rad"}
 
     def __init__(
