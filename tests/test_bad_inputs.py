@@ -354,3 +354,58 @@ def test_a_controller_runs_at_the_period_it_was_synthesized_for():
         _simulate(sample_period=2e-3)
     with pytest.raises(InputError, match="field 'sample_period'"):
         urpc.synthesize(robot, box, epsilon=1e-2, sample_period=-1e-3)
+
+
+# ------------------------------------------------- state vectors of the wrong size (controllers)
+def _controllers():
+    """The three laws on the RR arm, each at 1 kHz."""
+    from urpc.control.computed_torque import synthesize_computed_torque
+    from urpc.control.r_alpha import synthesize_r_alpha
+
+    robot, box, interval = _rr()
+    return {
+        "interval": interval,
+        "computed-torque": synthesize_computed_torque(robot, box, sample_period=1e-3),
+        "r-alpha": synthesize_r_alpha(robot, box, sample_period=1e-3),
+    }
+
+
+_TWO = np.zeros(2)
+_BAD_STATES = {
+    "q_too_long": ((np.zeros(3), _TWO, urpc.Reference(_TWO, _TWO, _TWO)), "q has shape (3,)"),
+    "q_too_short": ((np.zeros(1), _TWO, urpc.Reference(_TWO, _TWO, _TWO)), "q has shape (1,)"),
+    "qd_too_long": ((_TWO, np.zeros(4), urpc.Reference(_TWO, _TWO, _TWO)), "qd has shape (4,)"),
+    "q_text": (("abc", _TWO, urpc.Reference(_TWO, _TWO, _TWO)), "field 'q'"),
+    "reference_of_3_joints": (
+        (_TWO, _TWO, urpc.Reference(np.zeros(3), np.zeros(3), np.zeros(3))),
+        "reference.q has shape (3,)",
+    ),
+    "reference_of_1_joint": (
+        (_TWO, _TWO, urpc.Reference(np.zeros(1), np.zeros(1), np.zeros(1))),
+        "reference.q has shape (1,)",
+    ),
+    "qd_of_1_joint": ((_TWO, np.zeros(1), urpc.Reference(_TWO, _TWO, _TWO)), "qd has shape (1,)"),
+    "reference_is_a_tuple": ((_TWO, _TWO, (_TWO, _TWO, _TWO)), "field 'reference'"),
+}
+
+
+@pytest.mark.parametrize("law", ["interval", "computed-torque", "r-alpha"])
+@pytest.mark.parametrize("case", sorted(_BAD_STATES))
+def test_controller_output_names_the_vector_of_the_wrong_size(law, case):
+    controller = _controllers()[law]
+    (q, qd, reference), words = _BAD_STATES[case]
+    with pytest.raises(InputError) as info:
+        controller.output(0.0, q, qd, reference, controller.initial_state())
+    assert words in str(info.value)
+    if "shape" in words:
+        assert "2 joints" in str(info.value)
+
+
+@pytest.mark.parametrize("case", ["q_too_long", "reference_of_3_joints"])
+def test_controller_advance_names_the_vector_of_the_wrong_size(case):
+    controller = _controllers()["interval"]
+    (q, qd, reference), words = _BAD_STATES[case]
+    state = controller.initial_state()
+    for call in (controller.advance, controller.state_derivative):
+        with pytest.raises(InputError, match=words.replace("(", r"\(").replace(")", r"\)")):
+            call(0.0, q, qd, reference, state)

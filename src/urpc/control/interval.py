@@ -55,6 +55,7 @@ import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
 from ..bounds.base import BoundMethod
+from ..errors import InputError
 from ..model.inertia_bounds import InertiaBounds
 from .base import Controller, Reference
 
@@ -110,6 +111,7 @@ class IntervalPassivityController(Controller):
         self.bound = bound
         self.robot = bound.robot
         self.dof = self.robot.dof
+        self._dof_shape = (self.dof,)
         self.epsilon = float(epsilon)
         self.kappa_P, self.kappa_I = float(kappa_P), float(kappa_I)
         self.phi_P, self.phi_I = float(phi_P), float(phi_I)
@@ -171,44 +173,53 @@ class IntervalPassivityController(Controller):
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
     ) -> np.ndarray:
         """Joint torque ``u`` [N m] of eq. (4) with (10), or the implicit sampled law."""
-        if not (type(q) is type(qd) is type(reference.q) is np.ndarray):
-            # Array-likes (lists) from a caller: convert once, off the simulator's path.
-            q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
-            reference = Reference(
-                *(np.asarray(x, dtype=float) for x in dataclasses.astuple(reference))
-            )
-        Kr = self.Kr
-        e = reference.q - q
-        ed = reference.qd - qd
-        Kr_e = Kr * e
-        qd_a = reference.qd + Kr_e
-        qdd_a = reference.qdd + Kr * ed
-        r = ed + Kr_e
-        joints = self._joints
-        if self._uses_regressor:
-            Y = self._regressor(q, qd, qd_a, qdd_a)
-            nominal = Y @ self._pi0
-            lower, upper = self._enclose_regressor(Y)
-            if joints is not None:  # the regressor carries neither armature nor friction
-                self.bound.add_joint_terms(lower, upper, qd, qd_a, qdd_a, torque=nominal)
-        else:
-            robot = self.robot
-            nominal = robot.M(q) @ qdd_a + robot.C(q, qd) @ qd_a + robot.g(q)  # with armature
-            lower, upper = self.bound.enclose(q, qd, qd_a, qdd_a)
-            if joints is not None:
-                nominal += joints.nominal_torque(qd_a, qdd_a, armature=False)
-        # rho_i = max(|lower_i|, |upper_i|) = max(-lower_i, upper_i) since lower_i <= upper_i.
-        rho = np.maximum(-lower, upper)
-        rho_norm = math.sqrt(rho @ rho)
-        self.last_rho_norm = rho_norm
-        if self.adaptive:
-            s = state[0]
-            gain = (self.kappa_P + self.kappa_I * s) * rho_norm + self.phi_P + self.phi_I * s
-        else:
-            gain = self.kappa_P * rho_norm + self.phi_P
-        if self.implicit:
-            return nominal + self._sampled_feedback(q, gain, r)
-        return nominal + gain * r
+        try:
+            if not (type(q) is type(qd) is type(reference.q) is np.ndarray):
+                # Array-likes (lists) from a caller: convert once, off the simulator's path.
+                q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+                reference = Reference(
+                    *(np.asarray(x, dtype=float) for x in dataclasses.astuple(reference))
+                )
+            shape = self._dof_shape  # a one-entry vector would broadcast: refuse it
+            if not (reference.q.shape == reference.qd.shape == reference.qdd.shape == shape):
+                raise ValueError("the reference has the wrong size")
+            Kr = self.Kr
+            e = reference.q - q
+            ed = reference.qd - qd
+            Kr_e = Kr * e
+            qd_a = reference.qd + Kr_e
+            qdd_a = reference.qdd + Kr * ed
+            r = ed + Kr_e
+            joints = self._joints
+            if self._uses_regressor:
+                Y = self._regressor(q, qd, qd_a, qdd_a)
+                nominal = Y @ self._pi0
+                lower, upper = self._enclose_regressor(Y)
+                if joints is not None:  # the regressor carries neither armature nor friction
+                    self.bound.add_joint_terms(lower, upper, qd, qd_a, qdd_a, torque=nominal)
+            else:
+                robot = self.robot
+                nominal = robot.M(q) @ qdd_a + robot.C(q, qd) @ qd_a + robot.g(q)  # with armature
+                lower, upper = self.bound.enclose(q, qd, qd_a, qdd_a)
+                if joints is not None:
+                    nominal += joints.nominal_torque(qd_a, qdd_a, armature=False)
+            # rho_i = max(|lower_i|, |upper_i|) = max(-lower_i, upper_i) since lower_i <= upper_i.
+            rho = np.maximum(-lower, upper)
+            rho_norm = math.sqrt(rho @ rho)
+            self.last_rho_norm = rho_norm
+            if self.adaptive:
+                s = state[0]
+                gain = (self.kappa_P + self.kappa_I * s) * rho_norm + self.phi_P + self.phi_I * s
+            else:
+                gain = self.kappa_P * rho_norm + self.phi_P
+            if self.implicit:
+                return nominal + self._sampled_feedback(q, gain, r)
+            return nominal + gain * r
+        except InputError:
+            raise
+        except (ValueError, TypeError, IndexError, AttributeError) as exc:
+            # Only on failure (free on the fast path): say which vector has the wrong size.
+            raise self.state_error(q, qd, reference) or exc from None
 
     def _sampled_feedback(self, q: np.ndarray, gain: float, r: np.ndarray) -> np.ndarray:
         """``D (M_L + D T 1)^{-1} M_L r = D (r - D T y)`` [N m] with ``(M_L + D T 1) y = r``: the
@@ -229,7 +240,14 @@ class IntervalPassivityController(Controller):
         """``ds/dt = f(||e||)`` [rad] (Theorem 2); empty for Theorem 1."""
         if not self.adaptive:
             return np.zeros(0)
-        e = reference.q - q
+        try:
+            e = reference.q - q
+            if e.shape != self._dof_shape:  # q of one entry broadcasts: refuse it too
+                raise ValueError("wrong size")
+        except (ValueError, TypeError, AttributeError):
+            raise self.state_error(q, qd, reference) or InputError(
+                f"q and reference.q must be {self.dof} numbers", field="q"
+            ) from None
         norm = math.sqrt(e @ e)
         growing = norm >= self.epsilon and state[0] < self._s_max
         return np.array([norm if growing else 0.0])
@@ -247,7 +265,14 @@ class IntervalPassivityController(Controller):
         :attr:`phi_max`)."""
         if not self.adaptive:
             return state
-        e = reference.q - q
+        try:
+            e = reference.q - q
+            if e.shape != self._dof_shape:  # q of one entry broadcasts: refuse it too
+                raise ValueError("wrong size")
+        except (ValueError, TypeError, AttributeError):
+            raise self.state_error(q, qd, reference) or InputError(
+                f"q and reference.q must be {self.dof} numbers", field="q"
+            ) from None
         norm = math.sqrt(e @ e)
         if norm < self.epsilon or state[0] >= self._s_max:
             return state
