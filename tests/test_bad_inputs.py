@@ -297,6 +297,10 @@ API_CASES: dict[str, tuple[Callable[[Path], object], tuple[str, ...]]] = {
     "load_uncertainty_robot_name": (lambda tmp: urpc.load_uncertainty("rr_planar", "rr_planar"), ("field 'robot'", "urpc.load_robot")),
     "load_parameter_point_box_path": (lambda tmp: urpc.load_parameter_point("rr_planar", _rr()[0], "box.yaml"), ("field 'box'", "ParameterBox")),
     "save_into_an_existing_file": (_save_into_a_file, ("existing", "not a folder")),
+    "simulate_torque_limit_of_3_joints": (lambda tmp: _simulate(torque_limit=[1, 2, 3]), ("field 'torque_limit'", "3 entries", "2 joints")),
+    "simulate_torque_limit_text": (lambda tmp: _simulate(torque_limit="abc"), ("field 'torque_limit'", "not a number")),
+    "simulate_seed_text": (lambda tmp: _simulate(seed="abc"), ("field 'seed'", "integer >= 0")),
+    "simulate_seed_negative": (lambda tmp: _simulate(seed=-1), ("field 'seed'", "integer >= 0")),
     "save_under_an_existing_file": (lambda tmp: (tmp / "f").write_text("x") and _simulate().save(tmp / "f" / "run"), ("'", "not a writable folder")),
 }  # fmt: skip
 

@@ -142,9 +142,28 @@ def simulate(
             f"unknown disturbance {disturbance!r}; valid: {', '.join(DISTURBANCES)}",
             field="disturbance",
         )
+    try:
+        valid_seed = int(seed) == seed and int(seed) >= 0
+    except (TypeError, ValueError):
+        valid_seed = False
+    if not valid_seed:
+        raise InputError(f"{seed!r} is not an integer >= 0", field="seed")
     limit = None
     if torque_limit is not None:
-        limit = np.broadcast_to(np.asarray(torque_limit, dtype=float), (n,)).copy()
+        try:
+            limit = np.asarray(torque_limit, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(
+                f"{torque_limit!r} is not a number; expected numbers > 0 [N m], one or {n}",
+                field="torque_limit",
+            ) from None
+        if limit.ndim > 1 or limit.size not in (1, n):
+            raise InputError(
+                f"{torque_limit!r} has {limit.size} entries; the plant '{plant.name}' has {n} "
+                f"joints: give one number or {n}",
+                field="torque_limit",
+            )
+        limit = np.broadcast_to(limit.reshape(-1)[0] if limit.size == 1 else limit, (n,)).copy()
         if not np.all(limit > 0):
             raise InputError(
                 f"{torque_limit!r} is out of range; expected numbers > 0 [N m]",
