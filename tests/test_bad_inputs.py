@@ -176,6 +176,7 @@ CASES: dict[str, Case] = {
     "urdf_limit_without_effort": _urdf_case(_rr_with('effort="1000" velocity="20"', 'velocity="20"'), "Pinocchio cannot parse", "limit has no effort"),
     "box_yaml_alias_bomb": _box_case("links:\n  link2:\n    com_x: [&a [x, x, x, x, x, x, x, x, x, x], &b [*a, *a, *a, *a, *a, *a, *a, *a, *a, *a], &c [*b, *b, *b, *b, *b, *b, *b, *b, *b, *b], &d [*c, *c, *c, *c, *c, *c, *c, *c, *c, *c], &e [*d, *d, *d, *d, *d, *d, *d, *d, *d, *d], &f [*e, *e, *e, *e, *e, *e, *e, *e, *e, *e]]\n", "aliases", "more than"),
     "box_yaml_too_deep": _box_case("links: " + "[" * 40 + "]" * 40, "nested deeper than"),
+    "simulate_duration_beyond_memory": Case({}, ["simulate", "--robot", "rr_planar", "--duration", "1e12"], None, ("field 'duration'", "1e+12 s", "samples", "at most"), names_file=""),
     "negative_epsilon_reaches_urpc": Case({}, ["simulate", "rr_planar/s3_ic1", "--epsilon", "-1e-2"], None, ("epsilon must be > 0", "-1e-2"), names_file=""),
     "negative_percentage_reaches_urpc": Case({}, ["init", "rr_planar", "--out", "{tmp}/box.yaml", "--mass", "-5%"], None, ("--mass", "'-5%' must lie in [0%, 100%)"), names_file=""),
     "negative_runs_reaches_urpc": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "-2"], None, ("--runs", "'-2' must be an integer >= 1"), names_file=""),
@@ -301,6 +302,8 @@ API_CASES: dict[str, tuple[Callable[[Path], object], tuple[str, ...]]] = {
     "simulate_torque_limit_text": (lambda tmp: _simulate(torque_limit="abc"), ("field 'torque_limit'", "not a number")),
     "simulate_seed_text": (lambda tmp: _simulate(seed="abc"), ("field 'seed'", "integer >= 0")),
     "simulate_seed_negative": (lambda tmp: _simulate(seed=-1), ("field 'seed'", "integer >= 0")),
+    "simulate_duration_beyond_memory": (lambda tmp: _simulate(duration=1e12), ("field 'duration'", "samples", "at most")),
+    "simulate_continuous_duration_beyond_memory": (lambda tmp: _simulate(controller=urpc.synthesize(_rr()[0], _rr()[1], epsilon=1e-2), duration=1e12), ("field 'duration'", "samples")),
     "save_under_an_existing_file": (lambda tmp: (tmp / "f").write_text("x") and _simulate().save(tmp / "f" / "run"), ("'", "not a writable folder")),
 }  # fmt: skip
 

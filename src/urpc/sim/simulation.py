@@ -39,7 +39,7 @@ from ..control.base import Controller
 from ..errors import InputError
 from ..model.robot import Robot
 from ..trajectories import PaperTrajectory, Trajectory
-from ..validation import finite_vector, positive_number
+from ..validation import check_run_length, finite_vector, positive_number
 from .closed_loop import RunSetup
 from .continuous import CONTINUOUS_ATOL, CONTINUOUS_METHOD, CONTINUOUS_RTOL, run_continuous
 from .plants import PLANTS, make_plant
@@ -148,6 +148,11 @@ def simulate(
         valid_seed = False
     if not valid_seed:
         raise InputError(f"{seed!r} is not an integer >= 0", field="seed")
+    if sample_period is None:
+        rate = positive_number("output_rate", output_rate, "a finite number > 0 [Hz]")
+        check_run_length(duration, None, rate)
+    else:
+        check_run_length(duration, sample_period)
     limit = None
     if torque_limit is not None:
         try:
@@ -204,7 +209,6 @@ def simulate(
                     "continuous time",
                     field="disturbance_bound",
                 )
-            rate = positive_number("output_rate", output_rate, "a finite number > 0 [Hz]")
             series, info = run_continuous(setup, method, rtol, atol, rate)
         else:
             if sample_period > duration:
