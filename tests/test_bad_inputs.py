@@ -115,6 +115,7 @@ CASES: dict[str, Case] = {
     "urdf_zero_mass": _urdf_case(_rr_with(LINK2_MASS, '<mass value="0"/>').replace(LINK2_INERTIA, ZERO_INERTIA), "joint 'joint2' moves no mass"),
     "urdf_negative_mass": _urdf_case(_rr_with(LINK2_MASS, '<mass value="-5"/>'), "link.link2.inertial", ">= 0"),
     "urdf_inertia_not_psd": _urdf_case(_rr_with(LINK2_INERTIA, '<inertia ixx="1" ixy="0" ixz="0" iyy="-1" iyz="0" izz="1"/>'), "link.link2.inertial", "positive semi-definite"),
+    "urdf_inertia_slightly_negative": _urdf_case(_rr_with(LINK2_INERTIA, '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="-1e-10"/>'), "link.link2.inertial", "principal moment", "-1e-10"),
     "robot_unknown_name": Case({}, _check("ur55"), lambda tmp: urpc.load_robot("ur55"), ("unknown robot 'ur55'", "did you mean"), names_file=""),
     "urdf_mimic_joint": _urdf_case(_rr_with('<child link="link2"/>', '<child link="link2"/>\n    <mimic joint="joint1" multiplier="1" offset="0"/>'), "joint.joint2.mimic", "'joint2' mimics joint 'joint1'", "lock both"),
     "urdf_mimic_joint_panda": Case({}, ["check", "panda"], lambda tmp: urpc.load_robot("panda"), ("panda.urdf", "'panda_finger_joint2' mimics", "--lock panda_finger_joint1,panda_finger_joint2"), names_file=""),

@@ -243,5 +243,15 @@ def read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
         problem = inertia_problem(rotated, triangle=False)
         if problem:
             raise InputError(f"non-physical inertia: {problem}", source=path, field=field)
-        inertias[link.name] = pin.Inertia(mass, origin[:3, 3].copy(), rotated)
+        try:
+            inertias[link.name] = pin.Inertia(mass, origin[:3, 3].copy(), rotated)
+        except RuntimeError:  # Pinocchio needs every principal moment >= 0, with no tolerance
+            moments = np.linalg.eigvalsh(rotated)
+            raise InputError(
+                f"non-physical inertia: principal moment {moments[0]:.3g} is negative (principal "
+                f"moments {', '.join(f'{m:.3g}' for m in moments)}), which Pinocchio refuses: make every "
+                "principal moment >= 0",
+                source=path,
+                field=field,
+            ) from None
     return inertias
