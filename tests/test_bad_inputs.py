@@ -130,6 +130,9 @@ CASES: dict[str, Case] = {
     "locked_joint_unknown": Case({}, ["check", "panda", "--lock", "panda_finger"], lambda tmp: urpc.load_robot("panda", locked_joints=["panda_finger"]), ("cannot lock unknown joint", "panda_finger_joint1"), names_file=""),
     # ---------------------------------------------------------------- uncertainty files
     "box_missing_file": Case({}, _check("rr_planar", "{tmp}/none.yaml"), _load_box("rr_planar", "none.yaml"), ("does not exist",), names_file="none.yaml"),
+    "box_is_a_folder": Case({}, _check("rr_planar", "{tmp}"), lambda tmp: urpc.load_uncertainty(tmp, urpc.load_robot("rr_planar")), ("is a folder, not a file",), names_file=""),
+    "urdf_is_a_folder": Case({}, _check("{tmp}"), lambda tmp: urpc.load_robot(tmp), ("field 'robot'", "is a folder, not a file"), names_file=""),
+    "true_parameters_is_a_folder": Case({}, ["simulate", "--robot", "rr_planar", "--true-params", "{tmp}", "--duration", "0.01"], None, ("field 'true_parameters'", "is a folder, not a file"), names_file=""),
     "box_yaml_syntax": _box_case("links:\n  link2:\n    mass: [5, 10\n", "YAML syntax error at line"),
     "box_yaml_tabs": _box_case("links:\n\tlink2: {}\n", "YAML syntax error"),
     "box_top_level_list": _box_case("- link2\n", "expected a mapping"),
@@ -308,6 +311,8 @@ API_CASES: dict[str, tuple[Callable[[Path], object], tuple[str, ...]]] = {
     "simulate_seed_negative": (lambda tmp: _simulate(seed=-1), ("field 'seed'", "integer >= 0")),
     "simulate_duration_beyond_memory": (lambda tmp: _simulate(duration=1e12), ("field 'duration'", "samples", "at most")),
     "simulate_continuous_duration_beyond_memory": (lambda tmp: _simulate(controller=urpc.synthesize(_rr()[0], _rr()[1], epsilon=1e-2), duration=1e12), ("field 'duration'", "samples")),
+    "load_samples_of_a_folder": (lambda tmp: urpc.load_samples(tmp), ("is a folder, not a file",)),
+    "load_controller_of_a_folder": (lambda tmp: urpc.load_controller(tmp), ("is a folder, not a file",)),
     "save_under_an_existing_file": (lambda tmp: (tmp / "f").write_text("x") and _simulate().save(tmp / "f" / "run"), ("'", "not a writable folder")),
 }  # fmt: skip
 

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, no_file
 from .trajectories import (
     QUINTIC_PEAK_ACCELERATION,
     QUINTIC_PEAK_VELOCITY,
@@ -228,7 +228,7 @@ def load_samples(path: str | Path, dof: int | None = None, joint_names=()) -> Fi
     """
     path = Path(path)
     if not path.is_file():
-        raise InputError("trajectory file does not exist", path)
+        raise InputError(no_file(path, "trajectory file"), path)
     if path.suffix.lower() == ".npz":
         try:
             with np.load(path, allow_pickle=False) as archive:

@@ -24,7 +24,7 @@ from pydantic import (
 )
 
 from .. import names
-from ..errors import did_you_mean
+from ..errors import did_you_mean, no_file
 from .base import FieldError, FileFormat
 from .values import Count, NonNegative, Number, Positive, PositiveCount, Text, Vector
 
@@ -64,7 +64,7 @@ def resolve_file(value: Any, info: ValidationInfo, what: str, alternatives: str 
     base = Path((info.context or {}).get("base", Path.cwd()))
     path = path if path.is_absolute() else (base / path).resolve()
     if not path.is_file():
-        raise ValueError(f"{what} file '{path}' does not exist{alternatives}")
+        raise ValueError(no_file(path, f"{what} file '{path}'") + alternatives)
     return path
 
 
