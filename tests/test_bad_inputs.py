@@ -313,6 +313,10 @@ API_CASES: dict[str, tuple[Callable[[Path], object], tuple[str, ...]]] = {
     "simulate_continuous_duration_beyond_memory": (lambda tmp: _simulate(controller=urpc.synthesize(_rr()[0], _rr()[1], epsilon=1e-2), duration=1e12), ("field 'duration'", "samples")),
     "load_samples_of_a_folder": (lambda tmp: urpc.load_samples(tmp), ("is a folder, not a file",)),
     "load_controller_of_a_folder": (lambda tmp: urpc.load_controller(tmp), ("is a folder, not a file",)),
+    "certify_negative_duration": (lambda tmp: urpc.certify(_rr()[2], urpc.PaperTrajectory(), duration=-1), ("field 'duration'", "> 0")),
+    "certify_nan_duration": (lambda tmp: urpc.certify(_rr()[2], urpc.PaperTrajectory(), duration=float("nan")), ("field 'duration'", "> 0")),
+    "certify_negative_disturbance": (lambda tmp: urpc.certify(_rr()[2], urpc.PaperTrajectory(), duration=1.0, disturbance_bound=-1), ("field 'disturbance_bound'", ">= 0")),
+    "certify_computed_torque": (lambda tmp: urpc.certify(_controllers()["computed-torque"], urpc.PaperTrajectory(), duration=1.0), ("field 'controller'", "interval", "ComputedTorqueController")),
     "save_under_an_existing_file": (lambda tmp: (tmp / "f").write_text("x") and _simulate().save(tmp / "f" / "run"), ("'", "not a writable folder")),
 }  # fmt: skip
 

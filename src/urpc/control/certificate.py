@@ -33,6 +33,7 @@ import numpy as np
 from ..errors import InputError
 from ..jsonsafe import jsonable, non_finite_paths, restore_non_finite
 from ..trajectories import Trajectory
+from ..validation import number_in, positive_number
 from .cells import CellFloor
 from .certificate_report import advice, lightest_joint, torque_figures
 from .interval import IntervalPassivityController
@@ -162,7 +163,18 @@ def certify(
         progress: Called with one short line as each stage of the sampled-data search starts
             (``"enclosing 236 cells (||e|| <= 0.01, ||r|| <= 0.45)"``), or ``None``.
     """
+    if not isinstance(controller, IntervalPassivityController):
+        raise InputError(
+            "the certificate is that of the interval controller (urpc.synthesize); got "
+            f"{type(controller).__name__}",
+            field="controller",
+        )
+    duration = positive_number("duration", duration, "a finite number > 0 [s]")
     box = controller.bound.box
+    if disturbance_bound is not None:
+        disturbance_bound = number_in(
+            "disturbance_bound", disturbance_bound, "a finite number >= 0 [N m]", lambda x: x >= 0
+        )
     d = box.disturbance_bound if disturbance_bound is None else float(disturbance_bound)
     conditions = _theorem_conditions(controller)
     law = "continuous" if controller.sample_period is None else controller.sampled_law
