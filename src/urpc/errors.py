@@ -41,12 +41,12 @@ class SimulationError(UrpcError, RuntimeError):
     """A simulation that cannot continue (diverged, non-finite state)."""
 
 
-def no_file(path: str | Path, what: str = "file") -> str:
+def no_file(path: str | Path, what: str | None = None) -> str:
     """Why ``path`` cannot be read as a file: ``"<what> is a folder, not a file"`` for a folder,
-    else ``"<what> does not exist"``."""
+    else ``"<what> does not exist"`` (``what`` defaults to nothing, resp. ``"file"``)."""
     if Path(path).expanduser().is_dir():
-        return f"{what} is a folder, not a file"
-    return f"{what} does not exist"
+        return (f"{what} " if what else "") + "is a folder, not a file"
+    return f"{what or 'file'} does not exist"
 
 
 def did_you_mean(name: str, choices: Iterable[str]) -> str:
