@@ -283,6 +283,12 @@ def _save_into_a_file(tmp: Path):
     return result.save(tmp / "existing")
 
 
+def _ur5_controller():
+    ur5 = urpc.load_robot("ur5")
+    box = urpc.parse_uncertainty({"links": {"wrist_3_link": {"mass": "10%"}}}, ur5)
+    return urpc.synthesize(ur5, box, epsilon=1e-2, sample_period=1e-3)
+
+
 def _paper_trajectory_on_ur5(tmp: Path):
     ur5 = urpc.load_robot("ur5")
     box = urpc.parse_uncertainty({"links": {"wrist_3_link": {"mass": "10%"}}}, ur5)
@@ -317,6 +323,9 @@ API_CASES: dict[str, tuple[Callable[[Path], object], tuple[str, ...]]] = {
     "certify_nan_duration": (lambda tmp: urpc.certify(_rr()[2], urpc.PaperTrajectory(), duration=float("nan")), ("field 'duration'", "> 0")),
     "certify_negative_disturbance": (lambda tmp: urpc.certify(_rr()[2], urpc.PaperTrajectory(), duration=1.0, disturbance_bound=-1), ("field 'disturbance_bound'", ">= 0")),
     "certify_computed_torque": (lambda tmp: urpc.certify(_controllers()["computed-torque"], urpc.PaperTrajectory(), duration=1.0), ("field 'controller'", "interval", "ComputedTorqueController")),
+    "certify_paper_trajectory_on_ur5": (lambda tmp: urpc.certify(_ur5_controller(), urpc.PaperTrajectory(), duration=0.5), ("field 'trajectory'", "has 2 joints", "'ur5' has 6")),
+    "certify_trajectory_is_a_list": (lambda tmp: urpc.certify(_rr()[2], [0, 0], duration=0.5), ("field 'trajectory'", "reference(t)", "got list")),
+    "control_loop_paper_trajectory_on_ur5": (lambda tmp: urpc.ControlLoop(_ur5_controller(), urpc.PaperTrajectory()), ("field 'trajectory'", "has 2 joints", "'ur5' has 6")),
     "save_under_an_existing_file": (lambda tmp: (tmp / "f").write_text("x") and _simulate().save(tmp / "f" / "run"), ("'", "not a writable folder")),
 }  # fmt: skip
 

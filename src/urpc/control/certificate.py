@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..jsonsafe import jsonable, non_finite_paths, restore_non_finite
-from ..trajectories import Trajectory
+from ..trajectories import Trajectory, check_trajectory_dof
 from ..validation import number_in, positive_number
 from .cells import CellFloor
 from .certificate_report import advice, lightest_joint, torque_figures
@@ -169,6 +169,7 @@ def certify(
             f"{type(controller).__name__}",
             field="controller",
         )
+    check_trajectory_dof(trajectory, controller.dof, controller.robot.name)
     duration = positive_number("duration", duration, "a finite number > 0 [s]")
     box = controller.bound.box
     if disturbance_bound is not None:
