@@ -326,6 +326,10 @@ API_CASES: dict[str, tuple[Callable[[Path], object], tuple[str, ...]]] = {
     "certify_paper_trajectory_on_ur5": (lambda tmp: urpc.certify(_ur5_controller(), urpc.PaperTrajectory(), duration=0.5), ("field 'trajectory'", "has 2 joints", "'ur5' has 6")),
     "certify_trajectory_is_a_list": (lambda tmp: urpc.certify(_rr()[2], [0, 0], duration=0.5), ("field 'trajectory'", "reference(t)", "got list")),
     "control_loop_paper_trajectory_on_ur5": (lambda tmp: urpc.ControlLoop(_ur5_controller(), urpc.PaperTrajectory()), ("field 'trajectory'", "has 2 joints", "'ur5' has 6")),
+    "plant_point_of_3_values": (lambda tmp: _rr()[1].plant(_rr()[0], {"link2": [1, 2, 3]}), ("field 'point.link2'", "10 finite numbers")),
+    "plant_point_text": (lambda tmp: _rr()[1].plant(_rr()[0], {"link2": "heavy"}), ("field 'point.link2'", "10 finite numbers")),
+    "plant_joints_of_the_wrong_shape": (lambda tmp: _rr()[1].plant(_rr()[0], {"<joints>": [1, 2]}), ("field 'point.<joints>'", "(3, 2)")),
+    "physically_consistent_unknown_link": (lambda tmp: urpc.physically_consistent(_rr()[1], {"link9": np.zeros(10)}), ("field 'point.link9'", "link2")),
     "save_under_an_existing_file": (lambda tmp: (tmp / "f").write_text("x") and _simulate().save(tmp / "f" / "run"), ("'", "not a writable folder")),
 }  # fmt: skip
 
