@@ -115,6 +115,10 @@ CASES: dict[str, Case] = {
     "urdf_zero_mass": _urdf_case(_rr_with(LINK2_MASS, '<mass value="0"/>').replace(LINK2_INERTIA, ZERO_INERTIA), "joint 'joint2' moves no mass"),
     "urdf_negative_mass": _urdf_case(_rr_with(LINK2_MASS, '<mass value="-5"/>'), "link.link2.inertial", ">= 0"),
     "urdf_inertia_not_psd": _urdf_case(_rr_with(LINK2_INERTIA, '<inertia ixx="1" ixy="0" ixz="0" iyy="-1" iyz="0" izz="1"/>'), "link.link2.inertial", "positive semi-definite"),
+    "urdf_inertia_slightly_negative": _urdf_case(_rr_with(LINK2_INERTIA, '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="-1e-10"/>'), "link.link2.inertial", "principal moment", "-1e-10"),
+    "urdf_limit_lower_above_upper": _urdf_case(_rr_with('lower="-6.283185307179586" upper="6.283185307179586"', 'lower="1" upper="-1"'), "joint.joint1.limit", "lower 1", "upper -1"),
+    "urdf_joint_to_unknown_link": _urdf_case(_rr_with('<parent link="link1"/>', '<parent link="link9"/>'), "joint.joint2.parent", "unknown link 'link9'", "link1"),
+    "urdf_mass_not_a_number": _urdf_case(_rr_with(LINK2_MASS, '<mass value="heavy"/>'), "link.link2.inertial.mass.value", '"heavy"', "not a number"),
     "robot_unknown_name": Case({}, _check("ur55"), lambda tmp: urpc.load_robot("ur55"), ("unknown robot 'ur55'", "did you mean"), names_file=""),
     "urdf_mimic_joint": _urdf_case(_rr_with('<child link="link2"/>', '<child link="link2"/>\n    <mimic joint="joint1" multiplier="1" offset="0"/>'), "joint.joint2.mimic", "'joint2' mimics joint 'joint1'", "lock both"),
     "urdf_mimic_joint_panda": Case({}, ["check", "panda"], lambda tmp: urpc.load_robot("panda"), ("panda.urdf", "'panda_finger_joint2' mimics", "--lock panda_finger_joint1,panda_finger_joint2"), names_file=""),
@@ -126,6 +130,9 @@ CASES: dict[str, Case] = {
     "locked_joint_unknown": Case({}, ["check", "panda", "--lock", "panda_finger"], lambda tmp: urpc.load_robot("panda", locked_joints=["panda_finger"]), ("cannot lock unknown joint", "panda_finger_joint1"), names_file=""),
     # ---------------------------------------------------------------- uncertainty files
     "box_missing_file": Case({}, _check("rr_planar", "{tmp}/none.yaml"), _load_box("rr_planar", "none.yaml"), ("does not exist",), names_file="none.yaml"),
+    "box_is_a_folder": Case({}, _check("rr_planar", "{tmp}"), lambda tmp: urpc.load_uncertainty(tmp, urpc.load_robot("rr_planar")), ("is a folder, not a file",), names_file=""),
+    "urdf_is_a_folder": Case({}, _check("{tmp}"), lambda tmp: urpc.load_robot(tmp), ("field 'robot'", "is a folder, not a file"), names_file=""),
+    "true_parameters_is_a_folder": Case({}, ["simulate", "--robot", "rr_planar", "--true-params", "{tmp}", "--duration", "0.01"], None, ("field 'true_parameters'", "is a folder, not a file"), names_file=""),
     "box_yaml_syntax": _box_case("links:\n  link2:\n    mass: [5, 10\n", "YAML syntax error at line"),
     "box_yaml_tabs": _box_case("links:\n\tlink2: {}\n", "YAML syntax error"),
     "box_top_level_list": _box_case("- link2\n", "expected a mapping"),
@@ -176,6 +183,7 @@ CASES: dict[str, Case] = {
     "urdf_limit_without_effort": _urdf_case(_rr_with('effort="1000" velocity="20"', 'velocity="20"'), "Pinocchio cannot parse", "limit has no effort"),
     "box_yaml_alias_bomb": _box_case("links:\n  link2:\n    com_x: [&a [x, x, x, x, x, x, x, x, x, x], &b [*a, *a, *a, *a, *a, *a, *a, *a, *a, *a], &c [*b, *b, *b, *b, *b, *b, *b, *b, *b, *b], &d [*c, *c, *c, *c, *c, *c, *c, *c, *c, *c], &e [*d, *d, *d, *d, *d, *d, *d, *d, *d, *d], &f [*e, *e, *e, *e, *e, *e, *e, *e, *e, *e]]\n", "aliases", "more than"),
     "box_yaml_too_deep": _box_case("links: " + "[" * 40 + "]" * 40, "nested deeper than"),
+    "simulate_duration_beyond_memory": Case({}, ["simulate", "--robot", "rr_planar", "--duration", "1e12"], None, ("field 'duration'", "1e+12 s", "samples", "at most"), names_file=""),
     "negative_epsilon_reaches_urpc": Case({}, ["simulate", "rr_planar/s3_ic1", "--epsilon", "-1e-2"], None, ("epsilon must be > 0", "-1e-2"), names_file=""),
     "negative_percentage_reaches_urpc": Case({}, ["init", "rr_planar", "--out", "{tmp}/box.yaml", "--mass", "-5%"], None, ("--mass", "'-5%' must lie in [0%, 100%)"), names_file=""),
     "negative_runs_reaches_urpc": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "-2"], None, ("--runs", "'-2' must be an integer >= 1"), names_file=""),
@@ -275,6 +283,12 @@ def _save_into_a_file(tmp: Path):
     return result.save(tmp / "existing")
 
 
+def _ur5_controller():
+    ur5 = urpc.load_robot("ur5")
+    box = urpc.parse_uncertainty({"links": {"wrist_3_link": {"mass": "10%"}}}, ur5)
+    return urpc.synthesize(ur5, box, epsilon=1e-2, sample_period=1e-3)
+
+
 def _paper_trajectory_on_ur5(tmp: Path):
     ur5 = urpc.load_robot("ur5")
     box = urpc.parse_uncertainty({"links": {"wrist_3_link": {"mass": "10%"}}}, ur5)
@@ -297,6 +311,25 @@ API_CASES: dict[str, tuple[Callable[[Path], object], tuple[str, ...]]] = {
     "load_uncertainty_robot_name": (lambda tmp: urpc.load_uncertainty("rr_planar", "rr_planar"), ("field 'robot'", "urpc.load_robot")),
     "load_parameter_point_box_path": (lambda tmp: urpc.load_parameter_point("rr_planar", _rr()[0], "box.yaml"), ("field 'box'", "ParameterBox")),
     "save_into_an_existing_file": (_save_into_a_file, ("existing", "not a folder")),
+    "simulate_torque_limit_of_3_joints": (lambda tmp: _simulate(torque_limit=[1, 2, 3]), ("field 'torque_limit'", "3 entries", "2 joints")),
+    "simulate_torque_limit_text": (lambda tmp: _simulate(torque_limit="abc"), ("field 'torque_limit'", "not a number")),
+    "simulate_seed_text": (lambda tmp: _simulate(seed="abc"), ("field 'seed'", "integer >= 0")),
+    "simulate_seed_negative": (lambda tmp: _simulate(seed=-1), ("field 'seed'", "integer >= 0")),
+    "simulate_duration_beyond_memory": (lambda tmp: _simulate(duration=1e12), ("field 'duration'", "samples", "at most")),
+    "simulate_continuous_duration_beyond_memory": (lambda tmp: _simulate(controller=urpc.synthesize(_rr()[0], _rr()[1], epsilon=1e-2), duration=1e12), ("field 'duration'", "samples")),
+    "load_samples_of_a_folder": (lambda tmp: urpc.load_samples(tmp), ("is a folder, not a file",)),
+    "load_controller_of_a_folder": (lambda tmp: urpc.load_controller(tmp), ("is a folder, not a file",)),
+    "certify_negative_duration": (lambda tmp: urpc.certify(_rr()[2], urpc.PaperTrajectory(), duration=-1), ("field 'duration'", "> 0")),
+    "certify_nan_duration": (lambda tmp: urpc.certify(_rr()[2], urpc.PaperTrajectory(), duration=float("nan")), ("field 'duration'", "> 0")),
+    "certify_negative_disturbance": (lambda tmp: urpc.certify(_rr()[2], urpc.PaperTrajectory(), duration=1.0, disturbance_bound=-1), ("field 'disturbance_bound'", ">= 0")),
+    "certify_computed_torque": (lambda tmp: urpc.certify(_controllers()["computed-torque"], urpc.PaperTrajectory(), duration=1.0), ("field 'controller'", "interval", "ComputedTorqueController")),
+    "certify_paper_trajectory_on_ur5": (lambda tmp: urpc.certify(_ur5_controller(), urpc.PaperTrajectory(), duration=0.5), ("field 'trajectory'", "has 2 joints", "'ur5' has 6")),
+    "certify_trajectory_is_a_list": (lambda tmp: urpc.certify(_rr()[2], [0, 0], duration=0.5), ("field 'trajectory'", "reference(t)", "got list")),
+    "control_loop_paper_trajectory_on_ur5": (lambda tmp: urpc.ControlLoop(_ur5_controller(), urpc.PaperTrajectory()), ("field 'trajectory'", "has 2 joints", "'ur5' has 6")),
+    "plant_point_of_3_values": (lambda tmp: _rr()[1].plant(_rr()[0], {"link2": [1, 2, 3]}), ("field 'point.link2'", "10 finite numbers")),
+    "plant_point_text": (lambda tmp: _rr()[1].plant(_rr()[0], {"link2": "heavy"}), ("field 'point.link2'", "10 finite numbers")),
+    "plant_joints_of_the_wrong_shape": (lambda tmp: _rr()[1].plant(_rr()[0], {"<joints>": [1, 2]}), ("field 'point.<joints>'", "(3, 2)")),
+    "physically_consistent_unknown_link": (lambda tmp: urpc.physically_consistent(_rr()[1], {"link9": np.zeros(10)}), ("field 'point.link9'", "link2")),
     "save_under_an_existing_file": (lambda tmp: (tmp / "f").write_text("x") and _simulate().save(tmp / "f" / "run"), ("'", "not a writable folder")),
 }  # fmt: skip
 
@@ -354,3 +387,58 @@ def test_a_controller_runs_at_the_period_it_was_synthesized_for():
         _simulate(sample_period=2e-3)
     with pytest.raises(InputError, match="field 'sample_period'"):
         urpc.synthesize(robot, box, epsilon=1e-2, sample_period=-1e-3)
+
+
+# ------------------------------------------------- state vectors of the wrong size (controllers)
+def _controllers():
+    """The three laws on the RR arm, each at 1 kHz."""
+    from urpc.control.computed_torque import synthesize_computed_torque
+    from urpc.control.r_alpha import synthesize_r_alpha
+
+    robot, box, interval = _rr()
+    return {
+        "interval": interval,
+        "computed-torque": synthesize_computed_torque(robot, box, sample_period=1e-3),
+        "r-alpha": synthesize_r_alpha(robot, box, sample_period=1e-3),
+    }
+
+
+_TWO = np.zeros(2)
+_BAD_STATES = {
+    "q_too_long": ((np.zeros(3), _TWO, urpc.Reference(_TWO, _TWO, _TWO)), "q has shape (3,)"),
+    "q_too_short": ((np.zeros(1), _TWO, urpc.Reference(_TWO, _TWO, _TWO)), "q has shape (1,)"),
+    "qd_too_long": ((_TWO, np.zeros(4), urpc.Reference(_TWO, _TWO, _TWO)), "qd has shape (4,)"),
+    "q_text": (("abc", _TWO, urpc.Reference(_TWO, _TWO, _TWO)), "field 'q'"),
+    "reference_of_3_joints": (
+        (_TWO, _TWO, urpc.Reference(np.zeros(3), np.zeros(3), np.zeros(3))),
+        "reference.q has shape (3,)",
+    ),
+    "reference_of_1_joint": (
+        (_TWO, _TWO, urpc.Reference(np.zeros(1), np.zeros(1), np.zeros(1))),
+        "reference.q has shape (1,)",
+    ),
+    "qd_of_1_joint": ((_TWO, np.zeros(1), urpc.Reference(_TWO, _TWO, _TWO)), "qd has shape (1,)"),
+    "reference_is_a_tuple": ((_TWO, _TWO, (_TWO, _TWO, _TWO)), "field 'reference'"),
+}
+
+
+@pytest.mark.parametrize("law", ["interval", "computed-torque", "r-alpha"])
+@pytest.mark.parametrize("case", sorted(_BAD_STATES))
+def test_controller_output_names_the_vector_of_the_wrong_size(law, case):
+    controller = _controllers()[law]
+    (q, qd, reference), words = _BAD_STATES[case]
+    with pytest.raises(InputError) as info:
+        controller.output(0.0, q, qd, reference, controller.initial_state())
+    assert words in str(info.value)
+    if "shape" in words:
+        assert "2 joints" in str(info.value)
+
+
+@pytest.mark.parametrize("case", ["q_too_long", "reference_of_3_joints"])
+def test_controller_advance_names_the_vector_of_the_wrong_size(case):
+    controller = _controllers()["interval"]
+    (q, qd, reference), words = _BAD_STATES[case]
+    state = controller.initial_state()
+    for call in (controller.advance, controller.state_derivative):
+        with pytest.raises(InputError, match=words.replace("(", r"\(").replace(")", r"\)")):
+            call(0.0, q, qd, reference, state)

@@ -218,3 +218,23 @@ def test_a_continuous_joint_can_be_locked_at_an_angle():
     np.testing.assert_allclose(
         by_name.g(np.array([0.4])), full.g(np.array([0.4, 0.0]))[:1], atol=1e-12
     )
+
+
+@pytest.mark.parametrize(
+    "call, field",
+    [
+        (lambda r: r.M(np.zeros(3)), "q"),
+        (lambda r: r.g(np.zeros(1)), "q"),
+        (lambda r: r.C(np.zeros(2), np.zeros(5)), "qd"),
+        (lambda r: r.inverse_dynamics(np.zeros(2), np.zeros(2), np.zeros(3)), "qdd"),
+        (lambda r: r.forward_dynamics(np.zeros(2), np.zeros(2), np.zeros(1)), "tau"),
+        (lambda r: r.M("abc"), "q"),
+    ],
+)
+def test_dynamics_of_a_state_of_the_wrong_size_name_the_vector(rr, call, field):
+    """Not Pinocchio's multi-line C++ ValueError: one InputError naming the vector."""
+    with pytest.raises(InputError) as info:
+        call(rr)
+    assert info.value.field == field
+    message = str(info.value)
+    assert ("2 joints" in message or "2 numbers" in message) and "From file" not in message

@@ -41,6 +41,14 @@ class SimulationError(UrpcError, RuntimeError):
     """A simulation that cannot continue (diverged, non-finite state)."""
 
 
+def no_file(path: str | Path, what: str | None = None) -> str:
+    """Why ``path`` cannot be read as a file: ``"<what> is a folder, not a file"`` for a folder,
+    else ``"<what> does not exist"`` (``what`` defaults to nothing, resp. ``"file"``)."""
+    if Path(path).expanduser().is_dir():
+        return (f"{what} " if what else "") + "is a folder, not a file"
+    return f"{what or 'file'} does not exist"
+
+
 def did_you_mean(name: str, choices: Iterable[str]) -> str:
     """A hint naming the closest valid choice, or listing the valid choices."""
     choices = sorted(choices)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, no_file
 from .trajectory_samples import FileTrajectory
 
 _NAME = re.compile(r"^(qdd|qd|q)[_\s-]?(\d+)$")
@@ -27,7 +27,7 @@ def load_samples(path: str | Path, dof: int | None = None, joint_names=()) -> Fi
     """
     path = Path(path)
     if not path.is_file():
-        raise InputError("trajectory file does not exist", path)
+        raise InputError(no_file(path, "trajectory file"), path)
     if path.suffix.lower() == ".npz":
         try:
             with np.load(path, allow_pickle=False) as archive:

@@ -58,3 +58,31 @@ def number_in(field: str, value: Any, expected: str, valid: Callable[[float], bo
     if not (math.isfinite(number) and valid(number)):
         raise InputError(f"{value!r} is out of range; expected {expected}", field=field)
     return number
+
+
+#: Most samples one simulated run records (its series are held in memory: about 50 doubles per
+#: sample for a 7-joint arm, so 1e7 samples are some 4 GB; 2.8 h of simulated time at 1 kHz).
+MAX_RUN_SAMPLES = 10**7
+
+
+def check_run_length(
+    duration: float, sample_period: float | None, output_rate: float = 1000.0
+) -> None:
+    """Refuse a run whose series would not fit in memory, before anything is computed.
+
+    ``duration`` [s] at ``sample_period`` [s] (``None``: continuous time, recorded at
+    ``output_rate`` [Hz]) must record at most :data:`MAX_RUN_SAMPLES` samples.
+
+    Raises:
+        InputError: too many samples (field ``duration``), saying the longest duration allowed.
+    """
+    step = 1.0 / output_rate if sample_period is None else sample_period
+    samples = duration / step
+    if samples > MAX_RUN_SAMPLES:
+        what = "period" if sample_period is not None else "recording step"
+        raise InputError(
+            f"{duration:g} s at the {what} {step:g} s records {samples:.3g} samples, more than "
+            f"the {MAX_RUN_SAMPLES:.0e} a run holds in memory: give a duration of at most "
+            f"{MAX_RUN_SAMPLES * step:g} s (split a longer study into runs)",
+            field="duration",
+        )

@@ -6,6 +6,7 @@ from pathlib import Path
 
 from ..control import SAMPLED_LAWS
 from ..errors import InputError
+from ..validation import check_run_length
 from .common import (
     BOUND_METHODS,
     CONTROLLERS,
@@ -176,6 +177,8 @@ def run_simulate(args) -> int:
         raise InputError("--replay writes DIR/replay.html: give --out DIR")
     out = args.out
     scenario = scenario_from_arguments(args)
+    # Before the certificate (minutes of CPU on a real arm): the run must fit in memory.
+    check_run_length(scenario.duration, scenario.sample_period)
     setup = build(scenario)
     controller = build_controller(setup)
     outcome = guarantee_of(

@@ -97,6 +97,32 @@ class Controller(ABC):
         ``kappa``)."""
         return {}
 
+    def state_error(self, q, qd, reference) -> InputError | None:
+        """The error naming the first of ``q``, ``qd`` and the reference's ``q``, ``qd``, ``qdd``
+        that is not :attr:`dof` finite numbers (or a reference that is no :class:`Reference`),
+        else ``None``. Called only once a law has failed (free on the control step's path)."""
+        if not all(hasattr(reference, name) for name in ("q", "qd", "qdd")):
+            return InputError(
+                f"expected a Reference (q, qd, qdd), got {type(reference).__name__}",
+                field="reference",
+            )
+        dof = self.dof if self.dof is not None else getattr(self.robot, "dof", None)
+        vectors = {"q": q, "qd": qd}
+        vectors.update({f"reference.{n}": getattr(reference, n) for n in ("q", "qd", "qdd")})
+        for name, value in vectors.items():
+            try:
+                array = np.asarray(value, dtype=float)
+            except (TypeError, ValueError):
+                return InputError(f"{value!r} is not a vector of {dof} numbers", field=name)
+            if dof is not None and array.shape != (dof,):
+                who = f"{self.robot.name} has" if self.robot is not None else "the law commands"
+                return InputError(
+                    f"{name} has shape {array.shape}, but {who} {dof} joints", field=name
+                )
+            if not np.isfinite(array).all():
+                return InputError(f"{name} = {array} is not finite", field=name)
+        return None
+
 
 def sample_period_of(value: float | None) -> float | None:
     """A controller's ``sample_period`` argument checked: ``None`` (continuous time) or a finite

@@ -34,7 +34,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..jsonsafe import jsonable, non_finite_paths, restore_non_finite
-from ..trajectories import Trajectory
+from ..trajectories import Trajectory, check_trajectory_dof
+from ..validation import number_in, positive_number
 from ..wording import count
 from .argument import Condition
 from .base import actuation_delay_of
@@ -165,7 +166,19 @@ def certify(
         progress: Called with one short line as each stage of the sampled-data search starts
             (``"enclosing 236 cells (||e|| <= 0.01, ||r|| <= 0.45)"``), or ``None``.
     """
+    if not isinstance(controller, IntervalPassivityController):
+        raise InputError(
+            "the certificate is that of the interval controller (urpc.synthesize); got "
+            f"{type(controller).__name__}",
+            field="controller",
+        )
+    check_trajectory_dof(trajectory, controller.dof, controller.robot.name)
+    duration = positive_number("duration", duration, "a finite number > 0 [s]")
     box = controller.bound.box
+    if disturbance_bound is not None:
+        disturbance_bound = number_in(
+            "disturbance_bound", disturbance_bound, "a finite number >= 0 [N m]", lambda x: x >= 0
+        )
     d = box.disturbance_bound if disturbance_bound is None else float(disturbance_bound)
     conditions = controller.gain_law.conditions()
     law_delay = int(controller.delay)

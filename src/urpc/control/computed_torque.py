@@ -59,9 +59,20 @@ class ComputedTorqueController(Controller):
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
     ) -> np.ndarray:
         """``u = M0 (qdd_d + Kd ed + Kp e) + C0 qd + g0`` [N m]."""
-        acceleration = reference.qdd + self.Kd * (reference.qd - qd) + self.Kp * (reference.q - q)
-        config = self.robot.configuration(q)
-        return pin.rnea(self.robot.model, self._data, config, qd, acceleration).copy()
+        try:
+            shape = (self.dof,)  # a one-entry vector would broadcast: refuse it
+            if not (
+                np.shape(reference.q) == np.shape(reference.qd) == np.shape(reference.qdd) == shape
+            ):
+                raise ValueError("the reference has the wrong size")
+            acceleration = (
+                reference.qdd + self.Kd * (reference.qd - qd) + self.Kp * (reference.q - q)
+            )
+            config = self.robot.configuration(np.asarray(q, dtype=float))
+            return pin.rnea(self.robot.model, self._data, config, qd, acceleration).copy()
+        except (ValueError, TypeError, IndexError, AttributeError) as exc:
+            # Only on failure (free on the fast path): say which vector has the wrong size.
+            raise self.state_error(q, qd, reference) or exc from None
 
     def __repr__(self) -> str:
         return (

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, no_file
 
 FORMAT = "urpc-controller"
 VERSION = 1
@@ -119,7 +119,7 @@ def load_controller(path: str | Path):
 
     path = Path(path)
     if not path.is_file():
-        raise InputError("controller file does not exist", path)
+        raise InputError(no_file(path, "controller file"), path)
     try:
         payload = json.loads(path.read_text())
     except (OSError, ValueError) as exc:

@@ -42,6 +42,7 @@ import math
 import numpy as np
 
 from ..bounds.base import BoundMethod
+from ..errors import InputError
 from ..model.inertia_bounds import InertiaBounds
 from .base import Controller, Reference
 from .feedback import FeedbackLaw, ImplicitFeedback, feedback_law
@@ -97,6 +98,7 @@ class IntervalPassivityController(Controller):
         self.bound = bound
         self.robot = bound.robot
         self.dof = self.robot.dof
+        self._dof_shape = (self.dof,)
         self.epsilon = float(epsilon)
         self.kappa_P, self.kappa_I = float(kappa_P), float(kappa_I)
         self.phi_P, self.phi_I = float(phi_P), float(phi_I)
@@ -171,43 +173,60 @@ class IntervalPassivityController(Controller):
     ) -> np.ndarray:
         """Joint torque ``u`` [N m] of eq. (4) with the gain law's ``D`` and the feedback law's
         torque for it."""
-        if not (type(q) is type(qd) is type(reference.q) is np.ndarray):
-            # Array-likes (lists) from a caller: convert once, off the simulator's path.
-            q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
-            reference = Reference(
-                *(np.asarray(x, dtype=float) for x in dataclasses.astuple(reference))
-            )
-        Kr = self.Kr
-        e = reference.q - q
-        ed = reference.qd - qd
-        Kr_e = Kr * e
-        qd_a = reference.qd + Kr_e
-        qdd_a = reference.qdd + Kr * ed
-        r = ed + Kr_e
-        joints = self._joints
-        if self._uses_regressor:
-            Y = self._regressor(q, qd, qd_a, qdd_a)
-            nominal = Y @ self._pi0
-            lower, upper = self._enclose_regressor(Y)
-            if joints is not None:  # the regressor carries neither armature nor friction
-                self.bound.add_joint_terms(lower, upper, qd, qd_a, qdd_a, torque=nominal)
-        else:
-            robot = self.robot
-            nominal = robot.M(q) @ qdd_a + robot.C(q, qd) @ qd_a + robot.g(q)  # with armature
-            lower, upper = self.bound.enclose(q, qd, qd_a, qdd_a)
-            if joints is not None:
-                nominal += joints.nominal_torque(qd_a, qdd_a, armature=False)
-        # rho_i = max(|lower_i|, |upper_i|) = max(-lower_i, upper_i) since lower_i <= upper_i.
-        rho = np.maximum(-lower, upper)
-        rho_norm = math.sqrt(rho @ rho)
-        self.last_rho_norm = rho_norm
-        return nominal + self._torque(q, self._gain(rho_norm, state), r)
+        try:
+            if not (type(q) is type(qd) is type(reference.q) is np.ndarray):
+                # Array-likes (lists) from a caller: convert once, off the simulator's path.
+                q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+                reference = Reference(
+                    *(np.asarray(x, dtype=float) for x in dataclasses.astuple(reference))
+                )
+            shape = self._dof_shape  # a one-entry vector would broadcast: refuse it
+            if not (reference.q.shape == reference.qd.shape == reference.qdd.shape == shape):
+                raise ValueError("the reference has the wrong size")
+            Kr = self.Kr
+            e = reference.q - q
+            ed = reference.qd - qd
+            Kr_e = Kr * e
+            qd_a = reference.qd + Kr_e
+            qdd_a = reference.qdd + Kr * ed
+            r = ed + Kr_e
+            joints = self._joints
+            if self._uses_regressor:
+                Y = self._regressor(q, qd, qd_a, qdd_a)
+                nominal = Y @ self._pi0
+                lower, upper = self._enclose_regressor(Y)
+                if joints is not None:  # the regressor carries neither armature nor friction
+                    self.bound.add_joint_terms(lower, upper, qd, qd_a, qdd_a, torque=nominal)
+            else:
+                robot = self.robot
+                nominal = robot.M(q) @ qdd_a + robot.C(q, qd) @ qd_a + robot.g(q)  # with armature
+                lower, upper = self.bound.enclose(q, qd, qd_a, qdd_a)
+                if joints is not None:
+                    nominal += joints.nominal_torque(qd_a, qdd_a, armature=False)
+            # rho_i = max(|lower_i|, |upper_i|) = max(-lower_i, upper_i) since lower_i <= upper_i.
+            rho = np.maximum(-lower, upper)
+            rho_norm = math.sqrt(rho @ rho)
+            self.last_rho_norm = rho_norm
+            return nominal + self._torque(q, self._gain(rho_norm, state), r)
+        except InputError:
+            raise
+        except (ValueError, TypeError, IndexError, AttributeError) as exc:
+            # Only on failure (free on the fast path): say which vector has the wrong size.
+            raise self.state_error(q, qd, reference) or exc from None
 
     def state_derivative(
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
     ) -> np.ndarray:
         """``ds/dt = f(||e||)`` [rad] (Theorem 2); empty for Theorem 1."""
-        return self._gain_law.state_derivative(reference.q - q, state)
+        try:
+            e = reference.q - q
+            if e.shape != self._dof_shape:  # q of one entry broadcasts: refuse it too
+                raise ValueError("wrong size")
+        except (ValueError, TypeError, AttributeError):
+            raise self.state_error(q, qd, reference) or InputError(
+                f"q and reference.q must be {self.dof} numbers", field="q"
+            ) from None
+        return self._gain_law.state_derivative(e, state)
 
     def advance(
         self,
@@ -220,7 +239,15 @@ class IntervalPassivityController(Controller):
         """The state one sample later, ``min(s + T f(||e||), s_max)`` with ``T`` the
         :attr:`sample_period` (forward Euler; ``s_max`` is where ``phi`` reaches
         :attr:`phi_max`)."""
-        return self._gain_law.advance(reference.q - q, state, self.sample_period)
+        try:
+            e = reference.q - q
+            if e.shape != self._dof_shape:  # q of one entry broadcasts: refuse it too
+                raise ValueError("wrong size")
+        except (ValueError, TypeError, AttributeError):
+            raise self.state_error(q, qd, reference) or InputError(
+                f"q and reference.q must be {self.dof} numbers", field="q"
+            ) from None
+        return self._gain_law.advance(e, state, self.sample_period)
 
     def diagnostics(self, state: np.ndarray) -> dict[str, float]:
         """``phi`` [N m s/rad] and ``kappa`` [s/rad] at this state."""

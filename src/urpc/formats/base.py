@@ -18,7 +18,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model, model_validator
 from pydantic.fields import FieldInfo
 
-from ..errors import InputError, did_you_mean
+from ..errors import InputError, did_you_mean, no_file
 
 Format = TypeVar("Format", bound="FileFormat")
 
@@ -74,7 +74,7 @@ def read_yaml(path: str | Path) -> Any:
     """
     path = Path(path)
     if not path.is_file():
-        raise InputError("file does not exist", source=path)
+        raise InputError(no_file(path), source=path)
     try:
         with path.open("rb") as stream:
             data = stream.read(MAX_YAML_BYTES + 1)

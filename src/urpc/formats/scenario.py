@@ -29,7 +29,7 @@ from pydantic import (
 )
 
 from .. import names
-from ..errors import InputError, did_you_mean
+from ..errors import InputError, did_you_mean, no_file
 from ..wording import count
 from .base import FieldError, FileFormat, validate_fields
 from .controller_options import ControllerOptions
@@ -50,7 +50,7 @@ def resolve_file(value: Any, info: ValidationInfo, what: str, alternatives: str 
     base = Path((info.context or {}).get("base", Path.cwd()))
     path = path if path.is_absolute() else (base / path).resolve()
     if not path.is_file():
-        raise ValueError(f"{what} file '{path}' does not exist{alternatives}")
+        raise ValueError(no_file(path, f"{what} file '{path}'") + alternatives)
     return path
 
 

@@ -20,7 +20,7 @@ import importlib.resources
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import InputError, did_you_mean
+from ..errors import InputError, did_you_mean, no_file
 
 #: Short names for example-robot-data URDFs whose file stem is not the usual name.
 ALIASES = {"ur5": "ur5_robot", "ur3": "ur3_robot", "ur10": "ur10_robot"}
@@ -220,7 +220,7 @@ def resolve_robot(source: str | Path) -> RobotEntry:
     path = Path(text).expanduser()
     if path.suffix.lower() in (".urdf", ".xml") or path.exists() or "/" in text:
         if not path.is_file():
-            raise InputError(f"robot file '{text}' does not exist", field="robot")
+            raise InputError(no_file(path, f"robot file '{text}'"), field="robot")
         return RobotEntry(path.stem, path.resolve(), "file")
     builtin = builtin_robots()
     if text in builtin:

@@ -17,6 +17,7 @@ from typing import Literal
 import numpy as np
 import pinocchio as pin
 
+from ..errors import InputError
 from ..formats.uncertainty import BARYCENTRIC_FIELDS, PHYSICAL_FIELDS
 from .joint_dynamics import JointBox
 from .robot import Robot
@@ -189,14 +190,16 @@ class ParameterBox:
         if not point:
             return robot
         if JOINTS in point:
-            robot = robot.with_joint_parameters(point[JOINTS])
+            robot = robot.with_joint_parameters(
+                _point_values(point[JOINTS], JOINTS, (3, robot.dof))
+            )
             point = {k: v for k, v in point.items() if k != JOINTS}
             if not point:
                 return robot
         boxed = {b.link: b for b in self.links}
         inertias = {}
         for name, values in point.items():
-            values = np.asarray(values, dtype=float)
+            values = _point_values(values, name, (10,))
             # Links without a box are given in physical coordinates.
             inertias[name] = (
                 boxed[name].inertia(values) if name in boxed else inertia_from_physical(values)
@@ -237,3 +240,25 @@ class ParameterBox:
         if self.joints is not None and self.joints.uncertain.any():
             point[JOINTS] = rng.uniform(self.joints.lower, self.joints.upper)
         return point
+
+
+def _point_values(values, name: str, shape: tuple[int, ...]) -> np.ndarray:
+    """The coordinates of one entry of a parameter point as floats of ``shape``.
+
+    Raises:
+        InputError: not numbers, another shape, or a non-finite entry (field ``point.NAME``).
+    """
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        array = None
+    if array is None or array.shape != shape or not np.isfinite(array).all():
+        what = (
+            f"{shape[0]} finite numbers" if len(shape) == 1 else f"finite numbers of shape {shape}"
+        )
+        raise InputError(
+            f"{values!r} must be {what} (the coordinates of its box, in the order of "
+            "box.link_box(name).fields; 'joints': armature, damping and friction rows)",
+            field=f"point.{name}",
+        )
+    return array

@@ -224,7 +224,14 @@ def physically_consistent(box: ParameterBox, point: Mapping[str, Any]) -> bool:
     import pinocchio as pin
 
     for name, values in link_points(point).items():
-        parameters = box.link_box(name).standard_parameters(np.asarray(values, dtype=float))
+        try:
+            link_box = box.link_box(name)
+        except KeyError:
+            raise InputError(
+                f"no box for link '{name}'; " + did_you_mean(name, [b.link for b in box.links]),
+                field=f"point.{name}",
+            ) from None
+        parameters = link_box.standard_parameters(np.asarray(values, dtype=float))
         if not np.all(np.isfinite(parameters)):
             return False
         pseudo = pin.PseudoInertia.FromDynamicParameters(parameters).toMatrix()

@@ -228,26 +228,50 @@ class Robot:
         armature included (Pinocchio adds ``model.armature`` to the diagonal)."""
         # Pinocchio fills the upper triangle of a fresh array; mirror it (cached indices: this is
         # on the control step's hot path with the implicit sampled-data law).
-        M = pin.crba(self.model, self.data, self.configuration(q))
+        try:
+            M = pin.crba(self.model, self.data, self.configuration(q))
+        except (ValueError, TypeError, IndexError) as exc:
+            raise self._state_error(exc, q=q) from None
         lower = self._lower_indices
         M[lower] = M.T[lower]
         return M
 
     def C(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """Christoffel-consistent Coriolis matrix ``C(q, qd)`` [kg m^2/s] (``Mdot - 2C`` skew)."""
-        return pin.computeCoriolisMatrix(self.model, self.data, self.configuration(q), qd).copy()
+        try:
+            config = self.configuration(q)
+            return pin.computeCoriolisMatrix(self.model, self.data, config, qd).copy()
+        except (ValueError, TypeError, IndexError) as exc:
+            raise self._state_error(exc, q=q, qd=qd) from None
 
     def g(self, q: np.ndarray) -> np.ndarray:
         """Generalized gravity torque ``g(q)`` [N m or N]."""
-        return pin.computeGeneralizedGravity(self.model, self.data, self.configuration(q)).copy()
+        try:
+            config = self.configuration(q)
+            return pin.computeGeneralizedGravity(self.model, self.data, config).copy()
+        except (ValueError, TypeError, IndexError) as exc:
+            raise self._state_error(exc, q=q) from None
 
     def inverse_dynamics(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
         """``M(q) qdd + C(q, qd) qd + g(q)`` [N m or N] (Pinocchio RNEA)."""
-        return pin.rnea(self.model, self.data, self.configuration(q), qd, qdd).copy()
+        try:
+            return pin.rnea(self.model, self.data, self.configuration(q), qd, qdd).copy()
+        except (ValueError, TypeError, IndexError) as exc:
+            raise self._state_error(exc, q=q, qd=qd, qdd=qdd) from None
 
     def forward_dynamics(self, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Joint accelerations [rad/s^2 or m/s^2] under torque ``tau`` (Pinocchio ABA)."""
-        return pin.aba(self.model, self.data, self.configuration(q), qd, tau).copy()
+        try:
+            return pin.aba(self.model, self.data, self.configuration(q), qd, tau).copy()
+        except (ValueError, TypeError, IndexError) as exc:
+            raise self._state_error(exc, q=q, qd=qd, tau=tau) from None
+
+    def _state_error(self, exc: Exception, **vectors) -> Exception:
+        """Once a dynamics call failed: the InputError naming the vector of the wrong size or
+        type (instead of Pinocchio's multi-line C++ message), else ``exc``."""
+        from .regressor import state_vector_error
+
+        return state_vector_error(self, **vectors) or exc
 
     # ----------------------------------------------------------------------------- copies
     def with_link_inertias(self, inertias: Mapping[str, pin.Inertia]) -> Robot:

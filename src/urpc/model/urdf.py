@@ -116,6 +116,68 @@ def check_tree(root, path: Path) -> None:
         )
 
 
+#: The numeric attributes of a URDF, by element path below <link> or <joint>.
+_NUMBERS = {
+    "link": {
+        "inertial/origin": ("xyz", "rpy"),
+        "inertial/mass": ("value",),
+        "inertial/inertia": ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
+    },
+    "joint": {
+        "origin": ("xyz", "rpy"),
+        "axis": ("xyz",),
+        "limit": ("lower", "upper", "effort", "velocity"),
+        "dynamics": ("damping", "friction"),
+    },
+}
+
+
+def check_numbers(root, path: Path) -> None:
+    """Refuse a numeric attribute that is not numbers (``<mass value="heavy"/>``, an ``xyz``
+    with two entries), naming the element, instead of the parsers' bare conversion error."""
+    for tag, elements in _NUMBERS.items():
+        for element in root.findall(tag):
+            name = element.get("name")
+            for where, attributes in elements.items():
+                found = element.find(where)
+                if found is None:
+                    continue
+                for attribute in attributes:
+                    text = found.get(attribute)
+                    if text is None:
+                        continue
+                    count = 3 if attribute in ("xyz", "rpy") else 1
+                    try:
+                        values = [float(x) for x in text.split()]
+                    except ValueError:
+                        values = []
+                    if len(values) != count:
+                        what = "3 numbers" if count == 3 else "a number"
+                        raise InputError(
+                            f'{attribute}="{text}" of <{where.split("/")[-1]}> in {tag} '
+                            f"'{name}' is not {what}",
+                            source=path,
+                            field=f"{tag}.{name}.{where.replace('/', '.')}.{attribute}",
+                        )
+
+
+def check_link_names(root, path: Path) -> None:
+    """Refuse a joint whose parent or child is not a link of the file (the tree check would
+    otherwise call it a closed loop)."""
+    links = [link.get("name") for link in root.findall("link")]
+    for joint in root.findall("joint"):
+        for end in ("parent", "child"):
+            element = joint.find(end)
+            if element is None or element.get("link") in links:
+                continue  # yourdfpy names a missing element
+            raise InputError(
+                f"joint '{joint.get('name')}' names unknown link '{element.get('link')}' as its "
+                f"{end}; " + did_you_mean(str(element.get("link")), links),
+                source=path,
+                field=f"joint.{joint.get('name')}.{end}",
+            )
+
+
 def mimic_joints(path: Path) -> dict[str, str]:
     """``{follower: leader}`` for every moving joint with a ``<mimic joint=...>`` element (a fixed
     joint never moves, so its mimic element has no effect: talos's gripper carries such ones)."""
@@ -194,6 +256,8 @@ def read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
             f"not a URDF: the root element must be <robot name=...>, found <{root.tag}>",
             source=path,
         )
+    check_numbers(root, path)
+    check_link_names(root, path)
     # Before yourdfpy and Pinocchio: a link with two parents crashes the C++ parser.
     check_tree(root, path)
     for joint in root.findall("joint"):
@@ -206,6 +270,16 @@ def read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
                 source=path,
                 field=f"joint.{joint.get('name')}.limit",
             )
+        limit = joint.find("limit")
+        if kind in ("revolute", "prismatic"):
+            lower, upper = (float(limit.get(end, "0")) for end in ("lower", "upper"))
+            if lower > upper:
+                raise InputError(
+                    f"joint '{joint.get('name')}' has limit lower {lower:g} above upper "
+                    f"{upper:g}; write lower <= upper",
+                    source=path,
+                    field=f"joint.{joint.get('name')}.limit",
+                )
     try:
         urdf = yourdfpy.URDF.load(
             str(path), load_meshes=False, build_scene_graph=False, load_collision_meshes=False
@@ -243,5 +317,15 @@ def read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
         problem = inertia_problem(rotated, triangle=False)
         if problem:
             raise InputError(f"non-physical inertia: {problem}", source=path, field=field)
-        inertias[link.name] = pin.Inertia(mass, origin[:3, 3].copy(), rotated)
+        try:
+            inertias[link.name] = pin.Inertia(mass, origin[:3, 3].copy(), rotated)
+        except RuntimeError:  # Pinocchio needs every principal moment >= 0, with no tolerance
+            moments = np.linalg.eigvalsh(rotated)
+            raise InputError(
+                f"non-physical inertia: principal moment {moments[0]:.3g} is negative (principal "
+                f"moments {', '.join(f'{m:.3g}' for m in moments)}), which Pinocchio refuses: make every "
+                "principal moment >= 0",
+                source=path,
+                field=field,
+            ) from None
     return inertias

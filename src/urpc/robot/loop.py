@@ -21,7 +21,7 @@ import numpy as np
 
 from ..control.base import Controller
 from ..errors import InputError
-from ..trajectories import Trajectory
+from ..trajectories import Trajectory, check_trajectory_dof
 
 #: Rows the log holds before it doubles.
 DEFAULT_CAPACITY = 16_384
@@ -75,6 +75,9 @@ class ControlLoop:
         if epsilon is None:  # Controller.epsilon is None for a law without one (r-alpha)
             epsilon = getattr(controller, "epsilon", None)
         self.epsilon = math.nan if epsilon is None else float(epsilon)
+        if controller.dof is not None:
+            name = getattr(controller.robot, "name", controller.name)
+            check_trajectory_dof(trajectory, controller.dof, name)
         self.dof = trajectory.dof
         self._clock = clock
         self.velocity_filter_hz = velocity_filter_hz

@@ -48,7 +48,7 @@ from ..control.base import Controller, actuation_delay_of
 from ..errors import InputError
 from ..model.robot import Robot
 from ..trajectories import PaperTrajectory, Trajectory
-from ..validation import finite_vector, positive_number
+from ..validation import check_run_length, finite_vector, positive_number
 from .closed_loop import RunSetup
 from .continuous import CONTINUOUS_ATOL, CONTINUOUS_METHOD, CONTINUOUS_RTOL, run_continuous
 from .plants import PLANTS, make_plant
@@ -158,9 +158,33 @@ def simulate(
             f"unknown disturbance {disturbance!r}; valid: {', '.join(DISTURBANCES)}",
             field="disturbance",
         )
+    try:
+        valid_seed = int(seed) == seed and int(seed) >= 0
+    except (TypeError, ValueError):
+        valid_seed = False
+    if not valid_seed:
+        raise InputError(f"{seed!r} is not an integer >= 0", field="seed")
+    if sample_period is None:
+        rate = positive_number("output_rate", output_rate, "a finite number > 0 [Hz]")
+        check_run_length(duration, None, rate)
+    else:
+        check_run_length(duration, sample_period)
     limit = None
     if torque_limit is not None:
-        limit = np.broadcast_to(np.asarray(torque_limit, dtype=float), (n,)).copy()
+        try:
+            limit = np.asarray(torque_limit, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(
+                f"{torque_limit!r} is not a number; expected numbers > 0 [N m], one or {n}",
+                field="torque_limit",
+            ) from None
+        if limit.ndim > 1 or limit.size not in (1, n):
+            raise InputError(
+                f"{torque_limit!r} has {limit.size} entries; the plant '{plant.name}' has {n} "
+                f"joints: give one number or {n}",
+                field="torque_limit",
+            )
+        limit = np.broadcast_to(limit.reshape(-1)[0] if limit.size == 1 else limit, (n,)).copy()
         if not np.all(limit > 0):
             raise InputError(
                 f"{torque_limit!r} is out of range; expected numbers > 0 [N m]",
@@ -201,7 +225,6 @@ def simulate(
                     "continuous time",
                     field="disturbance_bound",
                 )
-            rate = positive_number("output_rate", output_rate, "a finite number > 0 [Hz]")
             series, info = run_continuous(setup, method, rtol, atol, rate)
         else:
             if sample_period > duration:

@@ -141,10 +141,22 @@ class RAlphaController(Controller):
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
     ) -> np.ndarray:
         """``u = -Q s - rho^2 / (rho ||s|| + eta) s`` [N m]."""
-        e = q - reference.q
-        s = qd - reference.qd + self.Lambda @ e
-        rho = self.rho(q, qd, reference)
-        return -self.Q @ s - (rho * rho / (rho * np.linalg.norm(s) + self.eta)) * s
+        try:
+            e = q - reference.q
+            s = qd - reference.qd + self.Lambda @ e
+            rho = self.rho(q, qd, reference)
+            u = -self.Q @ s - (rho * rho / (rho * np.linalg.norm(s) + self.eta)) * s
+        except (ValueError, TypeError, IndexError, AttributeError) as exc:
+            raise self.state_error(q, qd, reference) or exc from None
+        shape = (self.dof,)  # a one-entry vector would broadcast: refuse it
+        if not (
+            np.shape(q) == np.shape(qd) == u.shape == shape
+            and np.shape(reference.q) == np.shape(reference.qd) == np.shape(reference.qdd) == shape
+        ):
+            raise self.state_error(q, qd, reference) or InputError(
+                f"q, qd and the reference must be {self.dof} numbers", field="q"
+            )
+        return u
 
     def __repr__(self) -> str:
         return (
