@@ -400,25 +400,3 @@ def _usable(velocity_limit: np.ndarray) -> np.ndarray:
     """URDF velocity limits, with missing ones (0, negative, non-finite) read as unlimited."""
     limit = np.asarray(velocity_limit, dtype=float)
     return np.where(np.isfinite(limit) & (limit > 0), limit, np.inf)
-
-
-def check_trajectory_dof(trajectory: Any, dof: int, robot_name: str) -> None:
-    """Refuse ``trajectory`` unless it has ``reference(t)`` and ``dof`` joints (when it says).
-
-    Raises:
-        InputError: not a trajectory, or one of another number of joints (field ``trajectory``).
-    """
-    if not callable(getattr(trajectory, "reference", None)):
-        raise InputError(
-            "expected a trajectory with reference(t) (urpc.trajectories: PaperTrajectory, "
-            "SinusoidTrajectory, QuinticTrajectory, generic_trajectory), got "
-            f"{type(trajectory).__name__}",
-            field="trajectory",
-        )
-    joints = getattr(trajectory, "dof", dof)
-    if joints != dof:
-        raise InputError(
-            f"{trajectory!r} has {joints} joints, the robot {robot_name!r} has {dof}: give a "
-            "reference for every joint (generic_trajectory(robot) fits any arm)",
-            field="trajectory",
-        )

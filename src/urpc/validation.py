@@ -1,5 +1,6 @@
-"""Checks of numeric arguments at the API boundary: one :class:`~urpc.errors.InputError` naming
-the argument, instead of a numpy error (or a silent NaN) deep inside a simulation."""
+"""Checks of arguments at the API boundary (numbers, vectors, a reference's joints): one
+:class:`~urpc.errors.InputError` naming the argument, instead of a numpy error (or a silent NaN)
+deep inside a simulation or a certificate."""
 
 from __future__ import annotations
 
@@ -85,4 +86,31 @@ def check_run_length(
             f"the {MAX_RUN_SAMPLES:.0e} a run holds in memory: give a duration of at most "
             f"{MAX_RUN_SAMPLES * step:g} s (split a longer study into runs)",
             field="duration",
+        )
+
+
+def check_trajectory_dof(trajectory: Any, dof: int, owner: str) -> None:
+    """Refuse ``trajectory`` unless it has ``reference(t)`` and ``dof`` joints (when it says);
+    ``owner`` names what it drives in the message (``"the plant 'ur5'"``).
+
+    Raises:
+        InputError: not a trajectory, or one of another number of joints (field ``trajectory``).
+    """
+    if not callable(getattr(trajectory, "reference", None)):
+        raise InputError(
+            "expected a trajectory with reference(t) (urpc.trajectories: PaperTrajectory, "
+            "SinusoidTrajectory, QuinticTrajectory, generic_trajectory), got "
+            f"{type(trajectory).__name__}",
+            field="trajectory",
+        )
+    joints = getattr(trajectory, "dof", dof)
+    if joints != dof:
+        hint = (
+            "PaperTrajectory is the paper's 2-joint reference: give its amplitude per joint "
+            f"(PaperTrajectory(amplitude=[...] with {dof} values)) or use generic_trajectory(robot)"
+            if getattr(trajectory, "kind", None) == "paper"
+            else "give a reference for every joint (generic_trajectory(robot) fits any arm)"
+        )
+        raise InputError(
+            f"{trajectory!r} has {joints} joints, {owner} has {dof}: {hint}", field="trajectory"
         )

@@ -34,8 +34,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..jsonsafe import jsonable, non_finite_paths, restore_non_finite
-from ..trajectories import Trajectory, check_trajectory_dof
-from ..validation import number_in, positive_number
+from ..trajectories import Trajectory
+from ..validation import check_trajectory_dof, number_in, positive_number
 from ..wording import count
 from .argument import Condition
 from .base import actuation_delay_of
@@ -172,7 +172,7 @@ def certify(
             f"{type(controller).__name__}",
             field="controller",
         )
-    check_trajectory_dof(trajectory, controller.dof, controller.robot.name)
+    check_trajectory_dof(trajectory, controller.dof, f"the robot {controller.robot.name!r}")
     duration = positive_number("duration", duration, "a finite number > 0 [s]")
     box = controller.bound.box
     if disturbance_bound is not None:

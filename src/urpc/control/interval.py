@@ -218,15 +218,7 @@ class IntervalPassivityController(Controller):
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
     ) -> np.ndarray:
         """``ds/dt = f(||e||)`` [rad] (Theorem 2); empty for Theorem 1."""
-        try:
-            e = reference.q - q
-            if e.shape != self._dof_shape:  # q of one entry broadcasts: refuse it too
-                raise ValueError("wrong size")
-        except (ValueError, TypeError, AttributeError):
-            raise self.state_error(q, qd, reference) or InputError(
-                f"q and reference.q must be {self.dof} numbers", field="q"
-            ) from None
-        return self._gain_law.state_derivative(e, state)
+        return self._gain_law.state_derivative(self._error(q, qd, reference), state)
 
     def advance(
         self,
@@ -239,15 +231,20 @@ class IntervalPassivityController(Controller):
         """The state one sample later, ``min(s + T f(||e||), s_max)`` with ``T`` the
         :attr:`sample_period` (forward Euler; ``s_max`` is where ``phi`` reaches
         :attr:`phi_max`)."""
+        return self._gain_law.advance(self._error(q, qd, reference), state, self.sample_period)
+
+    def _error(self, q, qd, reference: Reference) -> np.ndarray:
+        """``e = q_d - q`` [rad], refused with one error naming the vector unless it has the
+        law's number of joints (a one-entry ``q`` would broadcast)."""
         try:
             e = reference.q - q
-            if e.shape != self._dof_shape:  # q of one entry broadcasts: refuse it too
+            if e.shape != self._dof_shape:
                 raise ValueError("wrong size")
         except (ValueError, TypeError, AttributeError):
             raise self.state_error(q, qd, reference) or InputError(
                 f"q and reference.q must be {self.dof} numbers", field="q"
             ) from None
-        return self._gain_law.advance(e, state, self.sample_period)
+        return e
 
     def diagnostics(self, state: np.ndarray) -> dict[str, float]:
         """``phi`` [N m s/rad] and ``kappa`` [s/rad] at this state."""

@@ -21,7 +21,8 @@ import numpy as np
 
 from ..control.base import Controller
 from ..errors import InputError
-from ..trajectories import Trajectory, check_trajectory_dof
+from ..trajectories import Trajectory
+from ..validation import check_trajectory_dof
 
 #: Rows the log holds before it doubles.
 DEFAULT_CAPACITY = 16_384
@@ -77,7 +78,7 @@ class ControlLoop:
         self.epsilon = math.nan if epsilon is None else float(epsilon)
         if controller.dof is not None:
             name = getattr(controller.robot, "name", controller.name)
-            check_trajectory_dof(trajectory, controller.dof, name)
+            check_trajectory_dof(trajectory, controller.dof, f"the robot {name!r}")
         self.dof = trajectory.dof
         self._clock = clock
         self.velocity_filter_hz = velocity_filter_hz

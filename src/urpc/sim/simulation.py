@@ -47,8 +47,8 @@ import numpy as np
 from ..control.base import Controller, actuation_delay_of
 from ..errors import InputError
 from ..model.robot import Robot
-from ..trajectories import PaperTrajectory, Trajectory
-from ..validation import check_run_length, finite_vector, positive_number
+from ..trajectories import Trajectory
+from ..validation import check_run_length, check_trajectory_dof, finite_vector, positive_number
 from .closed_loop import RunSetup
 from .continuous import CONTINUOUS_ATOL, CONTINUOUS_METHOD, CONTINUOUS_RTOL, run_continuous
 from .plants import PLANTS, make_plant
@@ -275,26 +275,7 @@ def _check_parts(plant: Any, controller: Any, trajectory: Any) -> None:
             f"urpc.control.Controller), got {type(controller).__name__}",
             field="controller",
         )
-    if not callable(getattr(trajectory, "reference", None)):
-        raise InputError(
-            "expected a trajectory with reference(t) (urpc.trajectories: PaperTrajectory, "
-            f"SinusoidTrajectory, QuinticTrajectory, generic_trajectory), got "
-            f"{type(trajectory).__name__}",
-            field="trajectory",
-        )
-    dof = getattr(trajectory, "dof", plant.dof)
-    if dof != plant.dof:
-        hint = (
-            f"; PaperTrajectory is the paper's 2-joint reference: give its amplitude per joint "
-            f"(PaperTrajectory(amplitude=[...] with {plant.dof} values)) or use "
-            "generic_trajectory(robot)"
-            if isinstance(trajectory, PaperTrajectory)
-            else ""
-        )
-        raise InputError(
-            f"{trajectory!r} has {dof} joints, the plant {plant.name!r} has {plant.dof}{hint}",
-            field="trajectory",
-        )
+    check_trajectory_dof(trajectory, plant.dof, f"the plant {plant.name!r}")
     if controller.dof is not None and controller.dof != plant.dof:
         raise InputError(
             f"controller {controller.name!r} was built for {controller.dof} joints, the plant "
