@@ -442,3 +442,19 @@ def test_controller_advance_names_the_vector_of_the_wrong_size(case):
     for call in (controller.advance, controller.state_derivative):
         with pytest.raises(InputError, match=words.replace("(", r"\(").replace(")", r"\)")):
             call(0.0, q, qd, reference, state)
+
+
+def test_a_box_applied_to_another_robot_is_refused_naming_the_links():
+    """A box made for the UR5 on the RR arm used to return the RR arm's nominal plant silently."""
+    ur5 = urpc.load_robot("ur5")
+    box = urpc.load_uncertainty("ur5", ur5)
+    rr = urpc.load_robot("rr_planar")
+    with pytest.raises(InputError) as caught:
+        box.plant(rr)
+    assert caught.value.field == "robot"
+    payloads = {payload.name for payload in box.payloads}
+    bounded = [b.link for b in box.links if b.link not in payloads]
+    assert "does not have" in str(caught.value) and all(n in str(caught.value) for n in bounded)
+    with pytest.raises(InputError):
+        box.nominal_robot(rr)
+    assert box.plant(ur5).dof == 6  # its own robot is still fine

@@ -171,7 +171,12 @@ class ParameterBox:
         the nominal joint parameters of :attr:`joints`.
 
         Idempotent: a robot that already carries them is returned unchanged.
+
+        Raises:
+            InputError: ``robot`` lacks a link the box bounds or carries a payload on (a box
+                made for another robot).
         """
+        self._check_robot(robot)
         for payload in self.payloads:
             if payload.name not in robot.link_names:
                 box = self.link_box(payload.name)
@@ -181,6 +186,20 @@ class ParameterBox:
         ):
             robot = robot.with_joint_parameters(self.joints.nominal)
         return robot
+
+    def _check_robot(self, robot: Robot) -> None:
+        payloads = {payload.name for payload in self.payloads}
+        needed = [b.link for b in self.links if b.link not in payloads]
+        needed += [payload.link for payload in self.payloads]
+        missing = sorted({name for name in needed if name not in robot.link_names})
+        if missing:
+            made_for = f" (made for {self.robot_name!r})" if self.robot_name else ""
+            raise InputError(
+                f"the parameter box{made_for} bounds links {missing} that robot "
+                f"{robot.name!r} does not have; its links: {list(robot.link_names)}",
+                self.source,
+                "robot",
+            )
 
     def plant(self, robot: Robot, point: Mapping[str, np.ndarray] | None = None) -> Robot:
         """The robot at a parameter point (link or payload name -> coordinates of its box's kind,
