@@ -458,3 +458,16 @@ def test_a_box_applied_to_another_robot_is_refused_naming_the_links():
     with pytest.raises(InputError):
         box.nominal_robot(rr)
     assert box.plant(ur5).dof == 6  # its own robot is still fine
+
+
+@pytest.mark.parametrize("value", [-1.0, 0.0, float("nan"), "big"])
+def test_simulate_refuses_a_max_state_that_is_not_a_positive_number(value):
+    rr = urpc.load_robot("rr_planar")
+    box = urpc.load_uncertainty("rr_planar", rr)
+    controller = urpc.synthesize(rr, box, 1e-2, sample_period=1e-3)
+    with pytest.raises(InputError) as caught:
+        urpc.simulate(
+            box.plant(rr), controller, urpc.trajectories.PaperTrajectory(), duration=0.01,
+            max_state=value,
+        )  # fmt: skip
+    assert caught.value.field == "max_state"

@@ -171,6 +171,12 @@ def test_errors_found_when_building_name_the_scenario_file(tmp_path):
     cases = [
         ({"robot": "rr_planer"}, "robot", "did you mean 'rr_planar'"),
         ({"initial_condition": {"q0": [0, 0, 0]}}, "initial_condition.q0", "2 joints"),
+        ({"initial_condition": {"q0": [0, 7.0]}}, "initial_condition.q0", "outside its limits"),
+        (
+            {"initial_condition": {"offset": [-7.0, 0]}},
+            "initial_condition",
+            "outside its limits [-6.28319, 6.28319]",
+        ),
         ({"torque_limit": [1, 2, 3]}, "torque_limit", "2 joints"),
         ({"trajectory": {"kind": "paper", "amplitude": [1]}}, "trajectory.amplitude", "2"),
         (

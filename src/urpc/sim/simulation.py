@@ -200,6 +200,7 @@ def simulate(
             "with a sample_period, or use the pinocchio plant for continuous time",
             field="plant",
         )
+    max_state = positive_number("max_state", max_state, "a finite number > 0 [rad, rad/s]")
     state0 = controller.initial_state()
     if controller_state0 is not None:
         state0 = finite_vector("controller_state0", controller_state0, controller.n_states)

@@ -108,6 +108,9 @@ def build(scenario: Scenario) -> ScenarioSetup:
     q0 = reference.q + _fit(ic.offset, nominal.dof, source, "initial_condition.offset")
     if ic.q0 is not None:
         q0 = _fit(ic.q0, nominal.dof, source, "initial_condition.q0")
+    _check_inside_limits(
+        q0, nominal, source, "initial_condition.q0" if ic.q0 is not None else "initial_condition"
+    )
     qd0 = reference.qd.copy()
     if ic.qd0 is not None:
         qd0 = _fit(ic.qd0, nominal.dof, source, "initial_condition.qd0")
@@ -128,6 +131,22 @@ def build(scenario: Scenario) -> ScenarioSetup:
             stacklevel=2,
         )
     return setup
+
+
+def _check_inside_limits(q0: np.ndarray, robot, source, field: str) -> None:
+    """Refuse an initial position outside the joint limits (the arm cannot start there)."""
+    lower, upper = robot.position_limits
+    slack = 1e-9 * np.maximum(1.0, np.abs(q0))
+    outside = np.flatnonzero((q0 < lower - slack) | (q0 > upper + slack))
+    if outside.size:
+        k = int(outside[0])
+        raise InputError(
+            f"the initial position of joint '{robot.joint_names[k]}' is {q0[k]:.6g}, outside its "
+            f"limits [{lower[k]:.6g}, {upper[k]:.6g}]: give a q0 (or an offset from the "
+            "reference's start) within the joint limits",
+            source,
+            field,
+        )
 
 
 def _fit(value: Any, dof: int, source: str | None, fieldname: str) -> np.ndarray:
