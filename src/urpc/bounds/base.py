@@ -69,6 +69,7 @@ class BoundMethod(ABC):
         #: The joint box when any joint has armature, damping or friction, else ``None``.
         self.joints = joints if joints.active else None
         self._joint_scratch = np.zeros(self.robot.dof)
+        self._nominal_parameters = np.asarray(self.robot.nominal_parameters, dtype=float)
 
     def enclose(
         self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray
@@ -76,6 +77,22 @@ class BoundMethod(ABC):
         """``(lower, upper)`` [N m] enclosing ``w`` at this state, over the whole box."""
         lower, upper = self.enclose_regressor(self.regressor(q, qd, qd_a, qdd_a))
         return self.add_joint_terms(lower, upper, qd, qd_a, qdd_a)
+
+    def torque_and_enclosure(
+        self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(tau0, lower, upper)`` [N m]: the nominal model's torque ``M0 qdd_a + C0 qd_a + g0``
+        (drives included) and the enclosure of ``w`` at this state, in one call: what the
+        interval law needs at each step. For a regressor bound, one ``Y_SL`` serves both, and
+        its rounding envelope is the one of this very evaluation (passed explicitly, so the
+        answer does not depend on earlier calls)."""
+        regressor = self.regressor
+        Y = regressor(q, qd, qd_a, qdd_a)
+        nominal = Y @ self._nominal_parameters
+        lower, upper = self.enclose_regressor(Y, regressor.envelope)
+        if self.joints is not None:  # the regressor carries neither armature nor friction
+            self.add_joint_terms(lower, upper, qd, qd_a, qdd_a, torque=nominal)
+        return nominal, lower, upper
 
     def add_joint_terms(
         self,

@@ -119,12 +119,7 @@ class IntervalPassivityController(Controller):
         self.n_states = self._gain_law.n_states
         # The two laws' step methods, bound once (the control step's path).
         self._gain, self._torque = self._gain_law.gain, self._feedback.torque
-        self._joints = bound.joints
-        self._uses_regressor = bound.uses_regressor
-        self._pi0 = np.asarray(self.robot.nominal_parameters, dtype=float)
-        if self._uses_regressor:
-            self._regressor = bound.regressor
-            self._enclose_regressor = bound.enclose_regressor
+        self._torque_and_enclosure = bound.torque_and_enclosure
 
     @property
     def gain_law(self) -> GainLaw:
@@ -190,19 +185,7 @@ class IntervalPassivityController(Controller):
             qd_a = reference.qd + Kr_e
             qdd_a = reference.qdd + Kr * ed
             r = ed + Kr_e
-            joints = self._joints
-            if self._uses_regressor:
-                Y = self._regressor(q, qd, qd_a, qdd_a)
-                nominal = Y @ self._pi0
-                lower, upper = self._enclose_regressor(Y)
-                if joints is not None:  # the regressor carries neither armature nor friction
-                    self.bound.add_joint_terms(lower, upper, qd, qd_a, qdd_a, torque=nominal)
-            else:
-                robot = self.robot
-                nominal = robot.M(q) @ qdd_a + robot.C(q, qd) @ qd_a + robot.g(q)  # with armature
-                lower, upper = self.bound.enclose(q, qd, qd_a, qdd_a)
-                if joints is not None:
-                    nominal += joints.nominal_torque(qd_a, qdd_a, armature=False)
+            nominal, lower, upper = self._torque_and_enclosure(q, qd, qd_a, qdd_a)
             # rho_i = max(|lower_i|, |upper_i|) = max(-lower_i, upper_i) since lower_i <= upper_i.
             rho = np.maximum(-lower, upper)
             rho_norm = math.sqrt(rho @ rho)

@@ -163,6 +163,18 @@ class RigorousBound(BoundMethod):
             ]
             return self._backward(forces, poses)
 
+    def torque_and_enclosure(
+        self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """As :meth:`BoundMethod.torque_and_enclosure`, the nominal torque from Pinocchio (this
+        method has no regressor)."""
+        robot = self.robot
+        nominal = robot.M(q) @ qdd_a + robot.C(q, qd) @ qd_a + robot.g(q)  # with armature
+        lower, upper = self.enclose(q, qd, qd_a, qdd_a)
+        if self.joints is not None:
+            nominal += self.joints.nominal_torque(qd_a, qdd_a, armature=False)
+        return nominal, lower, upper
+
     def enclose_regressor(self, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         raise UrpcError(
             "the 'rigorous' bound evaluates the Newton-Euler recursion on intervals and does not "

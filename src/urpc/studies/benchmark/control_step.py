@@ -167,7 +167,7 @@ def _profile_robot(robot_name: str, repeats: int) -> dict[str, float]:
         functions["crba"] = lambda: pin.crba(lower_robot.model, lower_data, config)
         shifted = inertia().copy()
         functions["solve"] = lambda: dposv(shifted, r, lower=0)
-    joints = controller._joints
+    joints = bound.joints
     if joints is not None:
         scratch_lower, scratch_upper, torque = lower.copy(), upper.copy(), np.zeros(len(q))
 
