@@ -168,18 +168,16 @@ class CenteredCoriolis:
         q: Ball,
         v_center: np.ndarray,
         parameters: Ball,
-        christoffel: Ball | None = None,
+        christoffel: Ball,
     ):
+        """``christoffel``: ``C(q; e_k)`` for the centre of ``parameters`` and each of its
+        directions, (cells, k, 1 + free, n, n), as :meth:`sharing` encloses it."""
         pi_center = Ball.point(parameters.mid)
         free = np.flatnonzero(parameters.rad > 0)
         self.pi_rad = parameters.rad[free]
         directions = unit_directions(parameters)
         v_point = Ball.point(v_center)
         self.center = regressor.coriolis_matrices(q, v_point, pi_center[None])[:, 0]
-        # C(q; e_k) for the centre and every direction, (cells, k, 1 + free, n, n).
-        if christoffel is None:
-            rows = Ball.point(np.concatenate([pi_center.mid[None], directions]))
-            christoffel = regressor.christoffel_matrices(q, rows)
         self.per_velocity = christoffel[:, :, 0]
         self.per_parameter = self.per_both = None
         if len(free):
