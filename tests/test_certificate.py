@@ -355,3 +355,24 @@ def test_a_delayed_law_is_not_certified_by_the_undelayed_argument(rr, rr_box):
     certificate = certify(delayed, PaperTrajectory(), **options)
     assert not certificate.certified
     assert certificate.failed[0].name == "actuation delay counted by the argument"
+
+
+@pytest.mark.parametrize("period", [2e-3, 4e-3, 8e-3])
+def test_the_contraction_margin_only_shrinks_in_a_wider_tube(rr, rr_box, period):
+    """The search does not enclose wider tubes once ``a > b`` fails over the tube ``epsilon``
+    (``SampledSearch.floor``): that relies on the margin ``a - b`` of a wider tube's enclosures
+    being no larger, which this checks on enclosures computed independently for each tube."""
+    from urpc.control.sampled_search import SampledSearch
+
+    controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=period)
+    search = SampledSearch(
+        CellFloor(controller, PaperTrajectory(), 4.0, cells=40), controller, 10.0
+    )
+    margins = []
+    for tube in (1e-2, 3e-2, 1e-1):
+        _, parts = search.bound.floor_at(period, 10.0, search.enclose(tube), 0.0)
+        margins.append(parts["margin"])
+    assert margins[0] >= margins[1] >= margins[2], margins
+    if margins[0] <= 0:  # the skipped tubes could not have certified a floor
+        certificate = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
+        assert certificate.epsilon_floor == math.inf and not certificate.certified
