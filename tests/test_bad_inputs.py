@@ -184,6 +184,7 @@ CASES: dict[str, Case] = {
     "box_yaml_alias_bomb": _box_case("links:\n  link2:\n    com_x: [&a [x, x, x, x, x, x, x, x, x, x], &b [*a, *a, *a, *a, *a, *a, *a, *a, *a, *a], &c [*b, *b, *b, *b, *b, *b, *b, *b, *b, *b], &d [*c, *c, *c, *c, *c, *c, *c, *c, *c, *c], &e [*d, *d, *d, *d, *d, *d, *d, *d, *d, *d], &f [*e, *e, *e, *e, *e, *e, *e, *e, *e, *e]]\n", "aliases", "more than"),
     "box_yaml_too_deep": _box_case("links: " + "[" * 40 + "]" * 40, "nested deeper than"),
     "simulate_duration_beyond_memory": Case({}, ["simulate", "--robot", "rr_planar", "--duration", "1e12"], None, ("field 'duration'", "1e+12 s", "samples", "at most"), names_file=""),
+    "scenario_duration_beyond_memory_names_the_file": Case({"box.yaml": "links: {link2: {mass: [5, 15]}}\n", "long.yaml": "robot: rr_planar\nuncertainty: box.yaml\nsample_period: 1.0e-3\nepsilon: 1.0e-2\nduration: 1.0e9\n"}, ["simulate", "{tmp}/long.yaml"], None, ("field 'duration'", "1e+09 s", "samples", "at most"), names_file="long.yaml"),
     "negative_epsilon_reaches_urpc": Case({}, ["simulate", "rr_planar/s3_ic1", "--epsilon", "-1e-2"], None, ("epsilon must be > 0", "-1e-2"), names_file=""),
     "negative_percentage_reaches_urpc": Case({}, ["init", "rr_planar", "--out", "{tmp}/box.yaml", "--mass", "-5%"], None, ("--mass", "'-5%' must lie in [0%, 100%)"), names_file=""),
     "negative_runs_reaches_urpc": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "-2"], None, ("--runs", "'-2' must be an integer >= 1"), names_file=""),

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -67,12 +68,16 @@ MAX_RUN_SAMPLES = 10**7
 
 
 def check_run_length(
-    duration: float, sample_period: float | None, output_rate: float = 1000.0
+    duration: float,
+    sample_period: float | None,
+    output_rate: float = 1000.0,
+    source: str | Path | None = None,
 ) -> None:
     """Refuse a run whose series would not fit in memory, before anything is computed.
 
     ``duration`` [s] at ``sample_period`` [s] (``None``: continuous time, recorded at
-    ``output_rate`` [Hz]) must record at most :data:`MAX_RUN_SAMPLES` samples.
+    ``output_rate`` [Hz]) must record at most :data:`MAX_RUN_SAMPLES` samples; ``source``: the
+    file the duration came from (a scenario), named in the error.
 
     Raises:
         InputError: too many samples (field ``duration``), saying the longest duration allowed.
@@ -85,6 +90,7 @@ def check_run_length(
             f"{duration:g} s at the {what} {step:g} s records {samples:.3g} samples, more than "
             f"the {MAX_RUN_SAMPLES:.0e} a run holds in memory: give a duration of at most "
             f"{MAX_RUN_SAMPLES * step:g} s (split a longer study into runs)",
+            source=source,
             field="duration",
         )
 

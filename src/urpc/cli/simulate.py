@@ -178,7 +178,7 @@ def run_simulate(args) -> int:
     out = args.out
     scenario = scenario_from_arguments(args)
     # Before the certificate (minutes of CPU on a real arm): the run must fit in memory.
-    check_run_length(scenario.duration, scenario.sample_period)
+    check_run_length(scenario.duration, scenario.sample_period, source=scenario.source)
     setup = build(scenario)
     controller = build_controller(setup)
     outcome = guarantee_of(
