@@ -17,10 +17,8 @@ import numpy as np
 import pytest
 from conftest import rr_closed_form
 
-from urpc.bounds import default_method
-from urpc.bounds.hull import HullBound
+from urpc.bounds import default_method, make_bound
 from urpc.control.base import Reference
-from urpc.control.interval import IntervalPassivityController
 from urpc.control.synthesis import synthesize
 from urpc.errors import InputError
 from urpc.sim.simulation import simulate
@@ -111,23 +109,23 @@ def test_rho_dominates_the_mismatch_at_sampled_plants(rr, rr_box):
         assert controller.last_rho_norm >= np.linalg.norm(worst) * (1 - 1e-12)
 
 
-def test_model_path_equals_regressor_path(rr, rr_box):
-    """Without a regressor the law uses the robot's M, C, g and bound.enclose: same torque."""
-
-    class ModelOnlyHull(HullBound):
-        uses_regressor = False
-
-    fast = synthesize(rr, rr_box, 1e-2, method="hull")
-    slow = IntervalPassivityController(
-        ModelOnlyHull(rr, rr_box), 1e-2, kappa_P=2, kappa_I=1, phi_P=1, phi_I=1e6, Kr=fast.Kr
-    )
+@pytest.mark.parametrize("method", ["hull", "vertex", "rigorous"])
+def test_the_law_step_gives_pinocchios_nominal_torque_and_the_bounds_enclosure(rr, rr_box, method):
+    """``torque_and_enclosure`` (the law's one call per step) against independent references: the
+    nominal torque is Pinocchio's ``M0 qdd_a + C0 qd_a + g0`` whether the method has a regressor
+    or not, and the enclosure is the method's own :meth:`enclose` at the same state."""
+    bound = make_bound(method, rr, rr_box)
+    nominal_robot = rr_box.nominal_robot(rr)
     rng = np.random.default_rng(3)
-    for _ in range(10):
-        q, qd, ref = _random_state(rng)
-        state = np.array([rng.uniform(0, 1e-2)])
-        np.testing.assert_allclose(
-            slow.output(0, q, qd, ref, state), fast.output(0, q, qd, ref, state), rtol=1e-10
-        )
+    for _ in range(5):
+        q, qd = rng.uniform(-2, 2, 2), rng.uniform(-3, 3, 2)
+        qd_a, qdd_a = rng.uniform(-3, 3, 2), rng.uniform(-10, 10, 2)
+        tau0, lower, upper = bound.torque_and_enclosure(q, qd, qd_a, qdd_a)
+        expected = nominal_robot.M(q) @ qdd_a + nominal_robot.C(q, qd) @ qd_a + nominal_robot.g(q)
+        np.testing.assert_allclose(tau0, expected, rtol=1e-10, atol=1e-9)
+        own_lower, own_upper = bound.enclose(q, qd, qd_a, qdd_a)
+        np.testing.assert_allclose(lower, own_lower, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(upper, own_upper, rtol=1e-12, atol=1e-12)
 
 
 def test_dead_zone_integral_and_theorem_selection(rr, rr_box):

@@ -9,7 +9,7 @@ from ..errors import InputError
 from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
 from ..names import BOUND_METHODS
-from .base import BoundMethod, check_box
+from .base import BoundMethod, RegressorBound, check_box
 from .hull import HullBound
 from .rigorous import RigorousBound
 from .vertex import VertexBound
@@ -47,4 +47,4 @@ def default_method(box: ParameterBox) -> str:
     return "hull"
 
 
-__all__ = ["METHODS", "BoundMethod", "default_method", "make_bound"]
+__all__ = ["METHODS", "BoundMethod", "RegressorBound", "default_method", "make_bound"]

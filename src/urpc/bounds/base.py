@@ -9,6 +9,7 @@ plus, when the joints have armature, damping or friction (:mod:`urpc.model.joint
 joint terms ``(Ia - Ia0) qdd_a + Dv qd - Dv0 qd_a + f_c - Fc0 sat(qd_a / v_s)`` (the controller
 compensates the nominal drive along the reference velocity ``qd_a``), which depend on
 other parameters than the links' and are added exactly (:meth:`BoundMethod.add_joint_terms`).
+The methods built on the regressor ``Y_SL`` share :class:`RegressorBound`.
 
 A bound method returns ``lower, upper`` with ``lower_i <= w_i <= upper_i`` for every parameter
 point of the box (and every ``||d|| <= beta_d`` when the disturbance bound is known, Theorem 1;
@@ -57,8 +58,9 @@ class BoundMethod(ABC):
 
     #: Name of the method, as chosen on the CLI and in scenario files.
     name: ClassVar[str]
-    #: True when :meth:`enclose_regressor` is implemented (fast methods built on ``Y_SL``).
-    uses_regressor: ClassVar[bool] = True
+    #: True for the methods built on ``Y_SL`` (:class:`RegressorBound`, with
+    #: :meth:`~RegressorBound.enclose_regressor`).
+    uses_regressor: ClassVar[bool] = False
 
     def __init__(self, robot: Robot, box: ParameterBox):
         check_robot_and_box(robot, box)
@@ -71,28 +73,19 @@ class BoundMethod(ABC):
         self._joint_scratch = np.zeros(self.robot.dof)
         self._nominal_parameters = np.asarray(self.robot.nominal_parameters, dtype=float)
 
+    @abstractmethod
     def enclose(
         self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """``(lower, upper)`` [N m] enclosing ``w`` at this state, over the whole box."""
-        lower, upper = self.enclose_regressor(self.regressor(q, qd, qd_a, qdd_a))
-        return self.add_joint_terms(lower, upper, qd, qd_a, qdd_a)
 
+    @abstractmethod
     def torque_and_enclosure(
         self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(tau0, lower, upper)`` [N m]: the nominal model's torque ``M0 qdd_a + C0 qd_a + g0``
         (drives included) and the enclosure of ``w`` at this state, in one call: what the
-        interval law needs at each step. For a regressor bound, one ``Y_SL`` serves both, and
-        its rounding envelope is the one of this very evaluation (passed explicitly, so the
-        answer does not depend on earlier calls)."""
-        regressor = self.regressor
-        Y = regressor(q, qd, qd_a, qdd_a)
-        nominal = Y @ self._nominal_parameters
-        lower, upper = self.enclose_regressor(Y, regressor.envelope)
-        if self.joints is not None:  # the regressor carries neither armature nor friction
-            self.add_joint_terms(lower, upper, qd, qd_a, qdd_a, torque=nominal)
-        return nominal, lower, upper
+        interval law needs at each step."""
 
     def add_joint_terms(
         self,
@@ -124,6 +117,45 @@ class BoundMethod(ABC):
         # lower <= upper, so max(|lower|, |upper|) = max(-lower, upper).
         return np.maximum(-lower, upper)
 
+    def _add_disturbance(
+        self, lower: np.ndarray, upper: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Theorem 1: a known bound ``||d|| <= beta_d`` adds ``[-beta_d, beta_d]`` per joint."""
+        if self.disturbance_bound:
+            lower = lower - self.disturbance_bound
+            upper = upper + self.disturbance_bound
+        return lower, upper
+
+
+class RegressorBound(BoundMethod):
+    """A bound method built on the Slotine-Li regressor: ``w = Y_SL (pi - pi0)`` enclosed from
+    ``Y_SL`` at the state (the vertex and hull methods); one ``Y_SL`` per step serves the
+    nominal torque and the enclosure."""
+
+    uses_regressor: ClassVar[bool] = True
+
+    def enclose(
+        self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``(lower, upper)`` [N m] enclosing ``w`` at this state, over the whole box."""
+        regressor = self.regressor
+        lower, upper = self.enclose_regressor(regressor(q, qd, qd_a, qdd_a), regressor.envelope)
+        return self.add_joint_terms(lower, upper, qd, qd_a, qdd_a)
+
+    def torque_and_enclosure(
+        self, q: np.ndarray, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """As :meth:`BoundMethod.torque_and_enclosure`: one ``Y_SL`` serves both, and its
+        rounding envelope is the one of this very evaluation (passed explicitly, so the answer
+        does not depend on earlier calls)."""
+        regressor = self.regressor
+        Y = regressor(q, qd, qd_a, qdd_a)
+        nominal = Y @ self._nominal_parameters
+        lower, upper = self.enclose_regressor(Y, regressor.envelope)
+        if self.joints is not None:  # the regressor carries neither armature nor friction
+            self.add_joint_terms(lower, upper, qd, qd_a, qdd_a, torque=nominal)
+        return nominal, lower, upper
+
     @property
     def regressor(self):
         """The :class:`~urpc.model.regressor.SlotineLiRegressor` of the nominal robot (shared)."""
@@ -149,15 +181,6 @@ class BoundMethod(ABC):
 
     def _envelope(self, Y: np.ndarray, envelope: float | None) -> float:
         return self.regressor.envelope_of(Y) if envelope is None else float(envelope)
-
-    def _add_disturbance(
-        self, lower: np.ndarray, upper: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Theorem 1: a known bound ``||d|| <= beta_d`` adds ``[-beta_d, beta_d]`` per joint."""
-        if self.disturbance_bound:
-            lower = lower - self.disturbance_bound
-            upper = upper + self.disturbance_bound
-        return lower, upper
 
 
 def check_robot_and_box(robot: object, box: object) -> None:

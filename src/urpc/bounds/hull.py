@@ -25,7 +25,7 @@ from . import interval as ia
 from .base import (
     ROUNDING_ABSOLUTE,
     ROUNDING_RELATIVE,
-    BoundMethod,
+    RegressorBound,
     envelope_weights,
     link_body_placement,
 )
@@ -59,7 +59,7 @@ def barycentric_enclosure(box: LinkBox) -> tuple[np.ndarray, np.ndarray]:
     return lower, upper
 
 
-class HullBound(BoundMethod):
+class HullBound(RegressorBound):
     """Exact hull over barycentric boxes; interval-enclosed physical boxes (sound, looser)."""
 
     name = "hull"

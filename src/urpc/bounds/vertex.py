@@ -50,7 +50,7 @@ from ..model.uncertainty import LinkBox, ParameterBox
 from .base import (
     ROUNDING_ABSOLUTE,
     ROUNDING_RELATIVE,
-    BoundMethod,
+    RegressorBound,
     envelope_weights,
     link_body_placement,
 )
@@ -58,7 +58,7 @@ from .com_box import N_QUADRATIC, box_maximum, quadratic_columns, vertex_values
 from .hull import barycentric_enclosure
 
 
-class VertexBound(BoundMethod):
+class VertexBound(RegressorBound):
     """The exact range of each link's term over physical boxes (mass, CoM, inertia about the
     CoM), exact over barycentric ones; sound up to the rounding margins.
 

@@ -8,7 +8,7 @@ from collections.abc import Mapping
 import numpy as np
 from flint import arb, ctx
 
-from ...errors import InputError, UrpcError, did_you_mean
+from ...errors import InputError, did_you_mean
 from ...model.joint_dynamics import STICTION_VELOCITY, JointBox
 from ...model.regressor import state_vector_error
 from ...model.robot import Robot
@@ -51,13 +51,9 @@ class RigorousBound(BoundMethod):
     Independent of Pinocchio's algorithms and of the regressor; slower than the fast methods
     (milliseconds per call) and looser (interval dependency), but every result is a proven
     enclosure of the exact ``w`` of the model over the box.
-
-    Raises:
-        UrpcError: from :meth:`enclose_regressor` (this method does not use the regressor).
     """
 
     name = "rigorous"
-    uses_regressor = False
 
     def __init__(self, robot: Robot, box: ParameterBox):
         super().__init__(robot, box)
@@ -174,12 +170,6 @@ class RigorousBound(BoundMethod):
         if self.joints is not None:
             nominal += self.joints.nominal_torque(qd_a, qdd_a, armature=False)
         return nominal, lower, upper
-
-    def enclose_regressor(self, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        raise UrpcError(
-            "the 'rigorous' bound evaluates the Newton-Euler recursion on intervals and does not "
-            "use the regressor; call enclose(q, qd, qd_a, qdd_a) instead"
-        )
 
     # ------------------------------------------------------------------------- internals
     def _state(self, *vectors: np.ndarray) -> list[list[arb]]:
