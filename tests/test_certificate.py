@@ -357,22 +357,30 @@ def test_a_delayed_law_is_not_certified_by_the_undelayed_argument(rr, rr_box):
     assert certificate.failed[0].name == "actuation delay counted by the argument"
 
 
-@pytest.mark.parametrize("period", [2e-3, 4e-3, 8e-3])
-def test_the_contraction_margin_only_shrinks_in_a_wider_tube(rr, rr_box, period):
-    """The search does not enclose wider tubes once ``a > b`` fails over the tube ``epsilon``
-    (``SampledSearch.floor``): that relies on the margin ``a - b`` of a wider tube's enclosures
-    being no larger, which this checks on enclosures computed independently for each tube."""
+@pytest.mark.parametrize("period", [1e-3, 2e-3, 4e-3, 8e-3])
+def test_the_floor_only_grows_with_the_tube_and_rho(rr, rr_box, period):
+    """The search does not enclose the wider tube when this tube's floor at ``rho = 0`` already
+    exceeds it, or ``a > b`` fails (``SampledSearch.floor``): that relies on a wider tube's
+    enclosures giving no larger margin ``a - b`` and no smaller floor, and on the floor growing
+    with ``rho``, which this checks on enclosures computed independently for each tube."""
     from urpc.control.sampled_search import SampledSearch
 
     controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=period)
     search = SampledSearch(
         CellFloor(controller, PaperTrajectory(), 4.0, cells=40), controller, 10.0
     )
-    margins = []
+    margins, floors = [], []
     for tube in (1e-2, 3e-2, 1e-1):
-        _, parts = search.bound.floor_at(period, 10.0, search.enclose(tube), 0.0)
+        quantities = search.enclose(tube)
+        floor, parts = search.bound.floor_at(period, 10.0, quantities, 0.0)
         margins.append(parts["margin"])
+        floors.append(floor)
+        at_rho = [
+            search.bound.floor_at(period, 10.0, quantities, x)[0] for x in (0, tube / 2, tube)
+        ]
+        assert at_rho[0] <= at_rho[1] <= at_rho[2], at_rho
     assert margins[0] >= margins[1] >= margins[2], margins
-    if margins[0] <= 0:  # the skipped tubes could not have certified a floor
+    assert floors[0] <= floors[1] <= floors[2], floors
+    if floors[0] > 1e-1:  # the skipped tube could not have had a fixed point
         certificate = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
         assert certificate.epsilon_floor == math.inf and not certificate.certified

@@ -82,11 +82,12 @@ class SampledSearch:
 
     def floor(self) -> tuple[float, dict, dict]:
         """The floor: within the tube ``||e|| <= epsilon`` if there is one, else in wider tubes
-        (up to ``10 epsilon``) for the report; ``inf`` beyond. A period that fails the
-        contraction ``a > b`` (or the inertia bounds) over the tube ``epsilon`` fails it over
-        every wider tube, whose enclosures hold this one's (``a`` and ``b`` do not depend on the
-        error within the tube, only on the boxes they are enclosed over): the wider tubes are
-        then not enclosed, which halves the cost of an uncertified period."""
+        (up to ``10 epsilon``) for the report; ``inf`` beyond. The wider tube is not enclosed
+        when it cannot have a fixed point: its enclosures hold this tube's, so its floor at any
+        ``rho`` is at least this tube's floor at ``rho = 0`` (the floor grows with ``rho`` and
+        with the boxes it is bounded over); when that exceeds ``10 epsilon`` (or is ``inf``: the
+        contraction ``a > b`` or the inertia bounds fail), the answer is ``inf`` without the
+        second enclosure, half the cost of an uncertified period."""
         tube = self.epsilon
         if not math.isfinite(self.d):
             quantities = self.floor_of.quantities(tube, 0.0, self.extension)
@@ -98,7 +99,8 @@ class SampledSearch:
                 basin = self.basin(quantities, rho)
                 parts.update(tube=rho, r_max=quantities["r_max"], basin_tube=basin)
                 return floor, parts, quantities
-            if tube >= 10.0 * self.epsilon or not parts.get("margin", 1.0) > 0:
+            widest = 10.0 * self.epsilon
+            if tube >= widest or self.bound.floor_at(self.T, self.d, quantities, 0.0)[0] > widest:
                 break
             tube *= 10.0
         quantities = self.enclose(self.epsilon)
