@@ -124,3 +124,33 @@ def test_no_robot_is_one_error_line():
     )
     assert done.returncode == 2 and done.stderr.startswith("error:") and "loopback" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_a_scenario_that_declares_an_actuation_delay_the_law_ignores_is_warned_about(tmp_path):
+    """``urpc run`` cannot change the robot's delay: when the scenario says the robot applies
+    each torque one sample late and the law does not predict over it, the run says so (and the
+    summary records both), rather than silently dropping the scenario's field."""
+    import yaml
+    from conftest import RR_DIR
+
+    shipped = RR_DIR / "scenarios" / "s3_ic1.yaml"
+    data = yaml.safe_load(shipped.read_text())
+    for key in ("uncertainty", "true_parameters"):
+        data[key] = str((shipped.parent / data[key]).resolve())
+    data["actuation_delay"] = 1
+    data["controller_options"] = {"interval": {"sampled_law": "implicit"}}
+    scenario = tmp_path / "delayed.yaml"
+    scenario.write_text(yaml.safe_dump(data))
+    robot, port = start_robot("--delay", "1")
+    try:
+        done = subprocess.run(
+            [*URPC, "run", str(scenario), "--robot-address", f"udp://127.0.0.1:{port}",
+             "--duration", "0.3", "--json", *LENIENT],
+            capture_output=True, text=True, timeout=120,
+        )  # fmt: skip
+    finally:
+        finish(robot)
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout)
+    assert summary["actuation_delay"] == 1 and summary["delay"] == 0, summary
+    assert "1 sample(s) late (actuation_delay)" in done.stderr and "--delay 1" in done.stderr

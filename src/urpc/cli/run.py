@@ -151,6 +151,15 @@ def run_robot(args) -> int:
         controller = synthesize(setup.robot, setup.box, scenario.epsilon, **options)
     if args.save_controller is not None:
         controller.save(args.save_controller)
+    declared = scenario.actuation_delay  # the robot's own delay, as the scenario states it
+    if declared is not None and declared != controller.delay:
+        print(
+            f"run: warning: {scenario.source or 'the scenario'} says the robot applies each "
+            f"torque {declared} sample(s) late (actuation_delay), but the law predicts over "
+            f"{controller.delay}; give --delay {declared} (or controller_options.interval.delay)",
+            file=sys.stderr,
+            flush=True,
+        )
     period = controller.sample_period
     safety = SafetyLayer.for_robot(
         setup.robot,
@@ -199,6 +208,7 @@ def run_robot(args) -> int:
         "message": report.message,
         "approach_s": approach,
         "delay": int(controller.delay),
+        "actuation_delay": declared,
         "velocity_filter_hz": args.velocity_filter,
         "cycles": report.cycles,
         "deadline_misses": report.watchdog["late_cycles"],
