@@ -342,3 +342,32 @@ def test_run_refuses_a_bad_velocity_filter_in_one_line(capsys):
     assert main([*argv, "--velocity-filter", "0"]) == 2
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1 and "--velocity-filter" in err
+
+
+@pytest.mark.parametrize("asked", ["flag", "scenario"])
+def test_run_refuses_a_saved_controller_whose_delay_is_not_the_one_asked_for(
+    asked, tmp_path, capsys
+):
+    """A saved law's delay cannot change: ``--delay 1`` (or a scenario whose interval options say
+    ``delay: 1``) with a saved undelayed controller is one error naming the field, before any
+    robot is contacted (port 9 has none), instead of running the undelayed law silently."""
+    import yaml
+    from conftest import RR_DIR
+
+    from urpc.__main__ import main
+
+    saved = _interval(delay=0).save(tmp_path / "controller.json")
+    scenario, extra = "rr_planar/s3_ic1", ["--delay", "1"]
+    if asked == "scenario":
+        shipped = RR_DIR / "scenarios" / "s3_ic1.yaml"
+        data = yaml.safe_load(shipped.read_text())
+        for key in ("uncertainty", "true_parameters"):
+            data[key] = str((shipped.parent / data[key]).resolve())
+        data["controller_options"] = {"interval": {"delay": 1}}
+        scenario, extra = str(tmp_path / "delayed.yaml"), []
+        (tmp_path / "delayed.yaml").write_text(yaml.safe_dump(data))
+    argv = ["run", scenario, "--robot-address", "udp://127.0.0.1:9", "--controller", str(saved)]
+    assert main([*argv, *extra]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1, err
+    assert "predicts over 0 sample(s)" in err and "not the 1 asked for" in err and "delay" in err

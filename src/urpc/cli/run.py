@@ -142,6 +142,19 @@ def run_robot(args) -> int:
                 f"the controller is for {controller.robot.name}, not {setup.robot.name}",
                 args.controller,
             )
+        # a saved law's delay is fixed: a different one asked for (--delay, or the scenario's
+        # controller_options.interval.delay) would otherwise be dropped without a word
+        wanted = (
+            interval_synthesis_options(scenario).get("delay") if args.delay is None else args.delay
+        )
+        if wanted is not None and wanted != controller.delay:
+            raise InputError(
+                f"the saved controller predicts over {controller.delay} sample(s) of delay, not "
+                f"the {wanted} asked for (--delay or controller_options.interval.delay); "
+                f"synthesize it again with delay {wanted}, or ask for {controller.delay}",
+                args.controller,
+                "delay",
+            )
     else:
         options = interval_synthesis_options(scenario)
         if args.delay is not None:
