@@ -154,9 +154,11 @@ JSON_HELP = "print one JSON object"
 PROGRESS_HELP = "no progress bar (shown only when stderr is a terminal)"
 
 
-def add_json_argument(parser, help: str = JSON_HELP, **options) -> None:
-    """``--json``: the command prints one JSON object instead of text."""
-    parser.add_argument("--json", action="store_true", help=help, **options)
+def add_json_argument(parser, *, on_stdout: bool = False, **options) -> None:
+    """``--json``: the command prints one JSON object instead of text (``on_stdout``: the help
+    says where)."""
+    text = JSON_HELP + (" on stdout" if on_stdout else "")
+    parser.add_argument("--json", action="store_true", help=text, **options)
 
 
 def add_progress_argument(parser, help: str = PROGRESS_HELP) -> None:
@@ -258,7 +260,7 @@ def add_output_arguments(
     parser.add_argument(
         "--out", type=Path, metavar="DIR", help=f"output folder for the {what} (default: {where})"
     )
-    add_json_argument(parser, JSON_HELP + " on stdout")
+    add_json_argument(parser, on_stdout=True)
     if progress:
         add_progress_argument(parser)
 
