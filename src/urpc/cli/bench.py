@@ -7,7 +7,16 @@ import dataclasses
 import sys
 
 from ..errors import InputError
-from .common import EXIT_OK, Parser, names, positive_int, print_json, show_progress
+from .common import (
+    EXIT_OK,
+    Parser,
+    add_json_argument,
+    add_progress_argument,
+    names,
+    positive_int,
+    print_json,
+    show_progress,
+)
 
 #: urpc.studies.benchmark.DEFAULT_LOOP_STEPS, not imported so that the CLI starts without
 #: Pinocchio (tests/test_benchmark.py checks that the two agree).
@@ -38,8 +47,8 @@ def register(commands) -> None:
         help=f"control-loop steps timed per robot (default {DEFAULT_LOOP_STEPS}, --quick 1000; "
         "tens of thousands for tails worth quoting)",
     )
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+    add_json_argument(p)
+    add_progress_argument(p, "no progress lines on stderr")
     p.set_defaults(handler=run_bench)
     parts = p.add_subparsers(dest="bench_part", metavar="[bounds|loop]", parser_class=Parser)
 
@@ -127,9 +136,7 @@ def run_bench_loop(args) -> int:
 
 def _add_json(part) -> None:
     # SUPPRESS: `urpc bench --json bounds` and `urpc bench bounds --json` both work.
-    part.add_argument(
-        "--json", action="store_true", default=argparse.SUPPRESS, help="print one JSON object"
-    )
+    add_json_argument(part, default=argparse.SUPPRESS)
 
 
 def _add_robots(part) -> None:

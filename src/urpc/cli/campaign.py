@@ -11,10 +11,10 @@ from .common import (
     EXIT_OK,
     RESULTS_ROOT,
     ROBOT_HELP,
-    UNCERTAINTY_HELP,
     add_certificate_arguments,
     add_output_arguments,
     add_scenario_argument,
+    add_uncertainty_option,
     count,
     non_negative_float,
     non_negative_int,
@@ -54,7 +54,7 @@ def register(commands) -> None:
         metavar="ROBOT",
         help=ROBOT_HELP + "; as in simulate, replaces or stands in for SCENARIO",
     )
-    p.add_argument("--uncertainty", "-u", metavar="FILE", help=UNCERTAINTY_HELP)
+    add_uncertainty_option(p)
     p.add_argument("--runs", type=positive_int, required=True, metavar="N", help="number of runs")
     where = p.add_mutually_exclusive_group()
     where.add_argument(

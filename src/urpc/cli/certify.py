@@ -3,7 +3,14 @@
 from __future__ import annotations
 
 from ..names import KR_CANDIDATES
-from .common import EXIT_OK, add_certificate_arguments, print_json, show_progress
+from .common import (
+    EXIT_OK,
+    add_certificate_arguments,
+    add_json_argument,
+    add_progress_argument,
+    print_json,
+    show_progress,
+)
 
 
 def register(commands) -> None:
@@ -33,13 +40,9 @@ def register(commands) -> None:
         "(certified with the lowest floor, else the longest certified period); each candidate "
         "costs one certificate",
     )
-    p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_json_argument(p)
     add_certificate_arguments(p, skippable=False)
-    p.add_argument(
-        "--no-progress",
-        action="store_true",
-        help="no progress line (shown only when stderr is a terminal)",
-    )
+    add_progress_argument(p, "no progress line (shown only when stderr is a terminal)")
     p.set_defaults(handler=run_certify)
 
 

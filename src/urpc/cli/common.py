@@ -150,6 +150,41 @@ def add_robot_arguments(parser: argparse.ArgumentParser, uncertainty_required: b
     parser.add_argument("--lock", type=names, default=[], metavar="JOINTS", help=LOCK_HELP)
 
 
+JSON_HELP = "print one JSON object"
+PROGRESS_HELP = "no progress bar (shown only when stderr is a terminal)"
+
+
+def add_json_argument(parser, *, on_stdout: bool = False, **options) -> None:
+    """``--json``: the command prints one JSON object instead of text (``on_stdout``: the help
+    says where)."""
+    text = JSON_HELP + (" on stdout" if on_stdout else "")
+    parser.add_argument("--json", action="store_true", help=text, **options)
+
+
+def add_progress_argument(parser, help: str = PROGRESS_HELP) -> None:
+    """``--no-progress`` (:func:`show_progress` reads it)."""
+    parser.add_argument("--no-progress", action="store_true", help=help)
+
+
+def add_robot_positional(parser) -> None:
+    """``ROBOT``, required and positional (``init``, ``identify``, ``virtual-robot``)."""
+    parser.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+
+
+def add_uncertainty_option(parser) -> None:
+    """``--uncertainty/-u FILE``, read as a path or a name by the scenario or the plant."""
+    parser.add_argument("--uncertainty", "-u", metavar="FILE", help=UNCERTAINTY_HELP)
+
+
+def add_new_file_arguments(parser) -> None:
+    """``--out/-o FILE`` (required) and ``--force``: the file a command writes, never
+    overwritten without ``--force``."""
+    parser.add_argument(
+        "--out", "-o", type=Path, required=True, metavar="FILE", help="file to write"
+    )
+    parser.add_argument("--force", action="store_true", help="overwrite FILE if it exists")
+
+
 def robot_argument(args) -> str:
     """The robot of :func:`add_robot_arguments` (positional or ``--robot``), stored back into
     ``args.robot``.
@@ -225,13 +260,9 @@ def add_output_arguments(
     parser.add_argument(
         "--out", type=Path, metavar="DIR", help=f"output folder for the {what} (default: {where})"
     )
-    parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    add_json_argument(parser, on_stdout=True)
     if progress:
-        parser.add_argument(
-            "--no-progress",
-            action="store_true",
-            help="no progress bar (shown only when stderr is a terminal)",
-        )
+        add_progress_argument(parser)
 
 
 #: Help of ``--no-certify`` and ``--no-cache`` (simulate, campaign; certify takes ``--no-cache``).

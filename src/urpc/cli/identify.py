@@ -11,7 +11,9 @@ from ..errors import InputError
 from .common import (
     EXIT_OK,
     LOCK_HELP,
-    ROBOT_HELP,
+    add_json_argument,
+    add_new_file_arguments,
+    add_robot_positional,
     names,
     non_negative_float,
     positive_float,
@@ -35,7 +37,7 @@ def register(commands) -> None:
         "urpc identify ur5 --data run1.csv run2.csv --prior ur5 --torque-noise 0.5 "
         "--payload tool0 --out box.yaml",
     )
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    add_robot_positional(p)
     p.add_argument("--excite", action="store_true", help="write an exciting trajectory to --out")
     p.add_argument("--data", nargs="+", type=Path, metavar="FILE", help="data files (CSV or NPZ)")
     p.add_argument(
@@ -57,8 +59,7 @@ def register(commands) -> None:
         help="payload mode: only the payload fixed to LINK is unknown (the prior's payload: "
         "section); with --excite: excite the parameters of a body fixed to LINK",
     )
-    p.add_argument("--out", "-o", type=Path, required=True, metavar="FILE", help="file to write")
-    p.add_argument("--force", action="store_true", help="overwrite FILE if it exists")
+    add_new_file_arguments(p)
     p.add_argument("--lock", type=names, default=[], metavar="JOINTS", help=LOCK_HELP)
     p.add_argument(
         "--jerk-bound",
@@ -111,7 +112,7 @@ def register(commands) -> None:
         help="--excite: bound of |qdd| [rad/s^2] (default 3)",
     )
     p.add_argument("--seed", type=int, default=0, metavar="N", help="--excite: seed (default 0)")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_json_argument(p)
     p.set_defaults(handler=run_identify)
 
 

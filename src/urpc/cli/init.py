@@ -8,7 +8,16 @@ import os
 from pathlib import Path
 
 from ..errors import InputError
-from .common import EXIT_OK, ROBOT_HELP, count, names, non_negative_float, print_json
+from .common import (
+    EXIT_OK,
+    add_json_argument,
+    add_new_file_arguments,
+    add_robot_positional,
+    count,
+    names,
+    non_negative_float,
+    print_json,
+)
 
 DEFAULT_MASS = "10%"
 DEFAULT_COM = 0.01
@@ -33,9 +42,8 @@ def register(commands) -> None:
         epilog="Example: urpc init ur10 --out box.yaml --payload tool0:3 && "
         "urpc simulate --robot ur10 --uncertainty box.yaml",
     )
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    p.add_argument("--out", "-o", type=Path, required=True, metavar="FILE", help="file to write")
-    p.add_argument("--force", action="store_true", help="overwrite FILE if it exists")
+    add_robot_positional(p)
+    add_new_file_arguments(p)
     p.add_argument(
         "--mass",
         type=percentage,
@@ -71,7 +79,7 @@ def register(commands) -> None:
         metavar="JOINTS",
         help="comma-separated joints to lock (at 0), as given to check and simulate",
     )
-    p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_json_argument(p)
     p.set_defaults(handler=run_init)
 
 

@@ -6,6 +6,7 @@ from ..errors import InputError
 from .common import (
     BOUND_METHODS,
     EXIT_OK,
+    add_json_argument,
     add_robot_arguments,
     count,
     joint_units,
@@ -17,7 +18,7 @@ from .common import (
 
 def register(commands) -> None:
     p = commands.add_parser("robots", help="list the robots that can be loaded by name")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_json_argument(p)
     p.set_defaults(handler=run_robots)
 
     p = commands.add_parser(
@@ -27,7 +28,7 @@ def register(commands) -> None:
         "links, parameters, nominal values, bounds and relative widths.",
     )
     add_robot_arguments(p)
-    p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_json_argument(p)
     p.set_defaults(handler=run_check)
 
     p = commands.add_parser(
@@ -50,7 +51,7 @@ def register(commands) -> None:
         default=None,
         help="bound method (default: by box kind)",
     )
-    p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_json_argument(p)
     p.set_defaults(handler=run_bound)
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .common import EXIT_OK, json_text, non_negative_int, positive_float
+from .common import EXIT_OK, add_json_argument, json_text, non_negative_int, positive_float
 
 #: Exit code of a run stopped by a fault or the watchdog.
 EXIT_STOPPED = 1
@@ -103,7 +103,7 @@ def register(commands) -> None:
         metavar="DIR",
         help="save result.npz, result.csv, summary.json, run.json",
     )
-    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    add_json_argument(p, on_stdout=True)
     p.set_defaults(handler=run_robot)
 
 

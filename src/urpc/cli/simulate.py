@@ -14,10 +14,10 @@ from .common import (
     LOCK_HELP,
     RESULTS_ROOT,
     ROBOT_HELP,
-    UNCERTAINTY_HELP,
     add_certificate_arguments,
     add_output_arguments,
     add_scenario_argument,
+    add_uncertainty_option,
     count,
     joint_units,
     json_text,
@@ -100,7 +100,7 @@ def add_scenario_arguments(p, simulate: bool = True) -> None:
     source = p.add_argument_group("robot and knowledge (replace or stand in for a scenario file)")
     source.add_argument("--robot", metavar="ROBOT", help=ROBOT_HELP)
     source.add_argument("--lock", type=names, metavar="JOINTS", help=LOCK_HELP + " (at 0)")
-    source.add_argument("--uncertainty", "-u", metavar="FILE", help=UNCERTAINTY_HELP)
+    add_uncertainty_option(source)
     run = p.add_argument_group("run settings")
     run.add_argument(
         "--method", choices=BOUND_METHODS, help="bound method of the interval controller"

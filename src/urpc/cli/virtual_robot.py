@@ -6,8 +6,8 @@ from __future__ import annotations
 from .common import (
     EXIT_OK,
     LOCK_HELP,
-    ROBOT_HELP,
-    UNCERTAINTY_HELP,
+    add_robot_positional,
+    add_uncertainty_option,
     names,
     non_negative_float,
     non_negative_int,
@@ -61,8 +61,8 @@ def register(commands) -> None:
         epilog="Stops when braked (watchdog or the controller's STOP), after --max-duration, or "
         "when no controller registers within --wait. Exit code 0; 2 on bad input.",
     )
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    p.add_argument("--uncertainty", "-u", metavar="FILE", help=UNCERTAINTY_HELP)
+    add_robot_positional(p)
+    add_uncertainty_option(p)
     p.add_argument(
         "--true-params",
         metavar="FILE",

@@ -12,7 +12,6 @@ All rigid-body math is Pinocchio's. This module adds what the controller needs o
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +23,7 @@ from .catalog import resolve_robot
 
 # inertia_problem: also imported from here by uncertainty, modular and studies.scenario.
 from .inertia import inertia_problem  # noqa: F401
+from .link_inertial import LinkInertial, body_inertia
 from .urdf import check_mimic_joints, lock_joints, read_urdf_inertials
 
 #: Pinocchio joint models accepted (fixed joints are merged away by the URDF parser).
@@ -41,30 +41,6 @@ _SUPPORTED = {
     "JointModelPZ": "prismatic",
     "JointModelPrismaticUnaligned": "prismatic",
 }
-
-
-@dataclass(frozen=True)
-class LinkInertial:
-    """Inertial data of one URDF link, and where Pinocchio attached it.
-
-    Attributes:
-        name: URDF link name.
-        joint_index: Index of the Pinocchio joint whose body carries the link (0: the fixed base).
-        placement: Pose of the link frame in that joint's frame.
-        inertia: Spatial inertia of the link expressed in the link frame (mass [kg], center of
-            mass in the link frame [m], rotational inertia about the center of mass [kg m^2]).
-    """
-
-    name: str
-    joint_index: int
-    placement: pin.SE3
-    inertia: pin.Inertia
-
-    @property
-    def parameters(self) -> np.ndarray:
-        """The 10 standard parameters in the link frame, Pinocchio order
-        ``[m, m c_x, m c_y, m c_z, I_xx, I_xy, I_yy, I_xz, I_yz, I_zz]`` (about the link origin)."""
-        return np.asarray(self.inertia.toDynamicParameters()).copy()
 
 
 class Robot:
@@ -323,18 +299,10 @@ class Robot:
     def _rebuilt(self, links: Sequence[LinkInertial]) -> Robot:
         model = self.model.copy()
         for j in range(model.njoints):
-            model.inertias[j] = _body_inertia(links, j)
+            model.inertias[j] = body_inertia(links, j)
         return Robot(
             model, links, self.name, self.urdf_path, self.locked_joints, self.urdf_dynamics
         )
-
-
-def _body_inertia(links: Sequence[LinkInertial], joint_index: int) -> pin.Inertia:
-    total = pin.Inertia.Zero()
-    for link in links:
-        if link.joint_index == joint_index:
-            total += link.placement.act(link.inertia)
-    return total
 
 
 def load_robot(
