@@ -21,7 +21,7 @@ is one), so that this module depends on no result class and the result class can
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Protocol
 
 import numpy as np
@@ -202,6 +202,22 @@ def plot_overview(result: Run) -> Figure:
     return figure
 
 
+def _legend_labels(
+    caller: str,
+    results: Sequence[Run],
+    labels: Sequence[str] | None,
+    default: Callable[[Run], str],
+) -> list[str]:
+    """One legend entry per run: ``labels`` checked against ``results``, or ``default`` of each
+    run; ``caller`` names the plotting function in the errors."""
+    if not results:
+        raise ValueError(f"{caller}() needs at least one result")
+    labels = list(labels) if labels is not None else [default(r) for r in results]
+    if len(labels) != len(results):
+        raise ValueError(f"{len(labels)} labels for {len(results)} results")
+    return labels
+
+
 def plot_errors(
     results: Sequence[Run],
     *,
@@ -215,12 +231,12 @@ def plot_errors(
         labels: Legend entries (default: ``scenario, controller`` of each run).
         title: Figure title (default: the first run's :func:`describe`).
     """
-    if not results:
-        raise ValueError("plot_errors() needs at least one result")
-    if labels is None:
-        labels = [", ".join(p for p in (r.scenario, r.controller) if p) for r in results]
-    if len(labels) != len(results):
-        raise ValueError(f"{len(labels)} labels for {len(results)} results")
+    labels = _legend_labels(
+        "plot_errors",
+        results,
+        labels,
+        lambda r: ", ".join(p for p in (r.scenario, r.controller) if p),
+    )
     figure = Figure(figsize=(7.0, 3.6), layout="constrained")
     axes = figure.add_subplot()
     _error_axes(axes, results, labels=list(labels))
@@ -242,11 +258,7 @@ def compare(
         labels: Legend entries (default: the controller names).
         title: Figure title (default: the first run's scenario and sampling).
     """
-    if not results:
-        raise ValueError("compare() needs at least one result")
-    labels = list(labels) if labels is not None else [r.controller for r in results]
-    if len(labels) != len(results):
-        raise ValueError(f"{len(labels)} labels for {len(results)} results")
+    labels = _legend_labels("compare", results, labels, lambda r: r.controller)
     dof = results[0].dof
     figure = Figure(figsize=(7.5, 2.6 * (dof + 1)), layout="constrained")
     axes = figure.subplots(dof + 1, 1, sharex=True)
