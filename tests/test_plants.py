@@ -383,3 +383,21 @@ def test_mujoco_continuous_joint_is_an_unwrapped_angle(mujoco, mixed):
     assert state.q[0] > np.pi + 0.5  # the continuous joint turned past pi without wrapping
     np.testing.assert_allclose(plant.state.q, reference.state.q, rtol=0, atol=1e-10)
     np.testing.assert_allclose(plant.state.qd, reference.state.qd, rtol=0, atol=1e-9)
+
+
+def test_box_plant_uses_its_own_robot(rr, rr_box, rr_true_point):
+    """The short form builds the same plant as the explicit-robot form, checked on Pinocchio's
+    mass matrix at a random state; a hand-built box without a robot is refused."""
+    from urpc.model.parameter_box import ParameterBox
+
+    short, explicit = rr_box.plant(rr_true_point), rr_box.plant(rr, rr_true_point)
+    q = np.array([0.3, -1.1])
+    masses = [pin.crba(p.model, p.model.createData(), q) for p in (short, explicit)]
+    np.testing.assert_allclose(masses[0], masses[1], rtol=0, atol=0)
+    nominal = pin.crba(rr.model, rr.model.createData(), q)
+    assert not np.allclose(masses[0], nominal)  # the point moved the plant off the nominal
+    assert rr_box.robot is rr
+    with pytest.raises(InputError, match="not parsed for a robot"):
+        ParameterBox(links=rr_box.links).plant(rr_true_point)
+    with pytest.raises(InputError, match="takes a Robot first"):
+        rr_box.plant(rr_true_point, rr_true_point)

@@ -94,7 +94,7 @@ class Assembly:
         the same as ``load_uncertainty(uncertainty_path, robot)`` without parsing the YAML text
         back (8 ms of the pure-Python YAML reader saved per assembly). As every loaded robot,
         the robot is rigid; the box's ``joints:`` section carries the drives, and
-        ``box.nominal_robot(robot)`` (the controller's model) and ``box.plant(robot, point)``
+        ``box.nominal_robot(robot)`` (the controller's model) and ``box.plant(point)``
         have them.
         """
         robot = load_robot(self.urdf_path)

@@ -141,6 +141,8 @@ class ParameterBox:
         joints: The box of the joints' armature, damping and friction
             (:mod:`urpc.model.joint_dynamics`), or ``None``: the robot's own joint parameters
             (its URDF's ``<dynamics>``) are exact.
+        robot: The robot the box was parsed for (``None`` for a box built by hand), so that
+            ``box.plant(point)`` needs no robot.
     """
 
     links: tuple[LinkBox, ...]
@@ -149,6 +151,7 @@ class ParameterBox:
     source: str | None = None
     robot_name: str | None = field(default=None, compare=False)
     joints: JointBox | None = None
+    robot: Robot | None = field(default=None, compare=False, repr=False)
 
     def joint_box(self, robot: Robot) -> JointBox:
         """The joint box, or the exact one of ``robot``'s own joint parameters."""
@@ -201,10 +204,36 @@ class ParameterBox:
                 "robot",
             )
 
-    def plant(self, robot: Robot, point: Mapping[str, np.ndarray] | None = None) -> Robot:
+    def plant(
+        self,
+        robot: Robot | Mapping[str, np.ndarray] | None = None,
+        point: Mapping[str, np.ndarray] | None = None,
+    ) -> Robot:
         """The robot at a parameter point (link or payload name -> coordinates of its box's kind,
         and :data:`JOINTS` -> the ``(3, dof)`` joint parameters); what is not named stays
-        nominal. ``point=None`` gives the nominal robot."""
+        nominal. ``point=None`` gives the nominal robot.
+
+        ``box.plant(point)`` uses the robot the box was parsed for; ``box.plant(robot, point)``
+        (the older form) checks that ``robot`` has the links the box bounds.
+
+        Raises:
+            InputError: no robot given and the box knows none, or ``robot`` lacks a bounded link.
+        """
+        if not isinstance(robot, Robot):
+            if point is not None:
+                raise InputError(
+                    f"box.plant(robot, point) takes a Robot first, got {type(robot).__name__}",
+                    self.source,
+                    "robot",
+                )
+            robot, point = self.robot, robot
+            if robot is None:
+                raise InputError(
+                    "this parameter box was not parsed for a robot; "
+                    "call box.plant(robot, point) with the robot",
+                    self.source,
+                    "robot",
+                )
         robot = self.nominal_robot(robot)
         if not point:
             return robot

@@ -158,6 +158,7 @@ def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) ->
         source=source,
         robot_name=robot.name,
         joints=resolve_joint_box(spec.joints, robot, source) if spec.joints else None,
+        robot=robot,
     )
 
 

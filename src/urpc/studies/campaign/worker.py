@@ -73,7 +73,7 @@ def run_one(task: RunTask) -> RunOutcome:
     run_setup = dataclasses.replace(
         setup,
         scenario=setup.scenario.model_copy(update={"seed": spec.seed}),
-        plant=setup.box.plant(setup.robot, point),
+        plant=setup.box.plant(point),
         true_point=point,
         true_description=f"campaign run {spec.index} ({spec.kind} of the box)",
         q0=np.array(spec.q0),

@@ -114,7 +114,7 @@ def run_configuration(
         sample_period=sample_period,
     )
     point = sample_true_parameters(arm.box, seed, str(arm.assembly.uncertainty_path))
-    plant = arm.box.plant(arm.robot, point)
+    plant = arm.box.plant(point)
     trajectory = generic_trajectory(arm.nominal)
     try:
         result = simulate(

@@ -206,8 +206,8 @@ def tool_change_run(
     for link, values in point_before.items():  # the arm and its drives do not change
         if _same_box(first.box, second.box, link):
             point_after[link] = values
-    plant_before = first.box.plant(first.robot, point_before)
-    plant_after = second.box.plant(second.robot, point_after)
+    plant_before = first.box.plant(point_before)
+    plant_after = second.box.plant(point_after)
     joint_names = first.robot.joint_names
     described = {
         id(plant_before): f"{first.name}: {describe_point(point_before, joint_names)}",
