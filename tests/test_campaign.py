@@ -67,7 +67,7 @@ def test_draws_cover_every_vertex_then_uniform_points_inside_the_box(setup):
         assert np.all(np.abs(np.array(spec.q0) - setup.q0) <= 2 * epsilon)
         assert spec.qd0 == tuple(setup.qd0)
     for spec in specs[:8]:
-        assert np.array_equal(spec.point["link2"], box.vertex(spec.vertex)["link2"])
+        assert np.array_equal(spec.point["link2"], box.vertex(spec.vertex).links["link2"])
     # The paper's true plant (m2 = 10, lc2 = 0.525, I2 = 20/12) is vertex 7.
     assert np.array(specs[7].point["link2"])[[0, 1, 6]] == pytest.approx((10, 0.525, 20 / 12))
     assert len({s.seed for s in specs}) == 12
@@ -184,7 +184,7 @@ def test_a_run_with_the_scenarios_own_draws_reproduces_run_scenario(short):
         kind="uniform",
         vertex=None,
         seed=short.seed,
-        point={name: tuple(values) for name, values in setup.true_point.items()},
+        point={name: tuple(values) for name, values in setup.true_point.links.items()},
         q0=tuple(setup.q0),
         qd0=tuple(setup.qd0),
     )

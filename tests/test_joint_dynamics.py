@@ -95,10 +95,10 @@ def test_vertices_and_draws_cover_the_joint_box(ur5_box):
     joints = ur5_box.joints
     n_links = sum(int(b.uncertain.sum()) for b in ur5_box.links)
     assert ur5_box.n_uncertain == n_links + int(joints.uncertain.sum())
-    ends = np.stack([ur5_box.vertex(k)[JOINTS] for k in range(0, 2**ur5_box.n_uncertain, 97)])
+    ends = np.stack([ur5_box.vertex(k).joints for k in range(0, 2**ur5_box.n_uncertain, 97)])
     on_an_end = (ends == joints.lower) | (ends == joints.upper)
     assert on_an_end.all()
-    draws = np.stack([ur5_box.sample(np.random.default_rng(k))[JOINTS] for k in range(50)])
+    draws = np.stack([ur5_box.sample(np.random.default_rng(k)).joints for k in range(50)])
     assert (draws >= joints.lower).all() and (draws <= joints.upper).all()
     assert draws[:, joints.uncertain].std(axis=0).min() > 0
 

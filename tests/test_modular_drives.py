@@ -17,7 +17,6 @@ from test_modular import ACTUATOR as PLAIN_ACTUATOR
 
 from urpc.errors import InputError
 from urpc.model.modular import assemble, load_assembly, load_module_library
-from urpc.model.parameter_box import JOINTS
 from urpc.model.robot import load_robot
 from urpc.model.uncertainty import load_uncertainty
 from urpc.studies.demo import run_configuration, tool_change_run
@@ -163,7 +162,7 @@ def test_an_actuator_without_a_drive_is_a_rigid_joint(tmp_path):
 def test_an_arm_with_drives_is_drawn_with_them_and_meets_epsilon():
     run = run_configuration("arm_3dof", duration=2.0, repeats=1)
     box, point = run.arm.box, run.true_point
-    drawn = point[JOINTS]
+    drawn = point.joints
     assert np.all(drawn >= box.joints.lower) and np.all(drawn <= box.joints.upper)
     assert not np.allclose(drawn, box.joints.nominal)
     np.testing.assert_array_equal(run.plant.joint_parameters, drawn)

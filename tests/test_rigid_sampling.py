@@ -34,7 +34,9 @@ def test_the_sampler_draws_only_rigid_bodies_and_counts_the_rejections(rr, tmp_p
         rejected += count
     assert rejected > 0
     again, count = urpc.sample_rigid_point(box, np.random.default_rng(3))
-    np.testing.assert_array_equal(again["link2"], urpc.sample_rigid_point(box, 3)[0]["link2"])
+    np.testing.assert_array_equal(
+        again.links["link2"], urpc.sample_rigid_point(box, 3)[0].links["link2"]
+    )
 
 
 def test_simulate_says_how_many_draws_were_rejected(tmp_path, capsys):

@@ -35,8 +35,8 @@ def test_table_one_box(rr_box):
 
 def test_true_plant_is_a_vertex_of_the_box(rr, rr_box, rr_true_point):
     assert outside_box(rr_box, rr_true_point) == []
-    vertices = [rr_box.vertex(k)["link2"] for k in range(2**rr_box.n_uncertain)]
-    assert any(np.allclose(v, rr_true_point["link2"]) for v in vertices)
+    vertices = [rr_box.vertex(k).links["link2"] for k in range(2**rr_box.n_uncertain)]
+    assert any(np.allclose(v, rr_true_point.links["link2"]) for v in vertices)
     plant = rr_box.plant(rr, rr_true_point)
     assert plant.link("link2").inertia.mass == 10
 

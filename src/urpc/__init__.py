@@ -54,6 +54,7 @@ _LAZY = {
     "load_robot": (".model.robot", "load_robot"),
     "ParameterBox": (".model.uncertainty", "ParameterBox"),
     "load_parameter_point": (".model.uncertainty", "load_parameter_point"),
+    "ParameterPoint": (".model.point", "ParameterPoint"),
     "load_uncertainty": (".model.uncertainty", "load_uncertainty"),
     "parse_uncertainty": (".model.uncertainty", "parse_uncertainty"),
     "physically_consistent": (".model.parameter_point", "physically_consistent"),
@@ -79,6 +80,7 @@ __all__ = [
     "Controller",
     "InputError",
     "ParameterBox",
+    "ParameterPoint",
     "Robot",
     "SimulationError",
     "UrpcError",
@@ -151,6 +153,7 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
     from .control.synthesis import synthesize
     from .identify import identify
     from .model.modular import Assembly, assemble, load_assembly, load_module_library
+    from .model.point import ParameterPoint
     from .model.robot import Robot, load_robot
     from .model.uncertainty import (
         ParameterBox,

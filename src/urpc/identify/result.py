@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..model.joint_dynamics import JOINT_FIELDS
 from ..model.parameter_box import ParameterBox
+from ..model.point import ParameterPoint
 from ..model.robot import Robot
 
 
@@ -112,25 +114,25 @@ class Identification:
             sums.setdefault(f.group, []).append(f.width_ratio)
         return {g: float(np.mean(v)) for g, v in sums.items()}
 
-    def contains(self, point: dict[str, np.ndarray]) -> bool:
-        """Whether a parameter point (link name -> coordinates of its prior box's kind, and
-        ``"<joints>"`` -> ``(3, dof)``) lies in the identified box, on every identified field."""
+    def contains(self, point: ParameterPoint | Mapping[str, np.ndarray]) -> bool:
+        """Whether a parameter point (a :class:`~urpc.model.point.ParameterPoint` of the prior
+        box, or its older ``dict`` form) lies in the identified box, on every identified
+        field."""
         return not self.misses(point)
 
-    def misses(self, point: dict[str, np.ndarray]) -> list[str]:
+    def misses(self, point: ParameterPoint | Mapping[str, np.ndarray]) -> list[str]:
         """``body.field`` of the identified fields a point lies outside of."""
-        from ..model.parameter_box import JOINTS
-
+        point = ParameterPoint.coerce(point, self.robot.dof)
         missed = []
         for f in self.fields:
             if f.joint:
-                values = np.asarray(point.get(JOINTS, self.prior.joint_box(self.robot).nominal))
-                value = values.reshape(3, -1)[
-                    JOINT_FIELDS.index(f.field), self.robot.joint_names.index(f.body)
-                ]
+                values = point.joints
+                if values is None:
+                    values = self.prior.joint_box(self.robot).nominal
+                value = values[JOINT_FIELDS.index(f.field), self.robot.joint_names.index(f.body)]
             else:
                 box = self.prior.link_box(f.body)
-                value = np.asarray(point.get(f.body, box.nominal))[box.fields.index(f.field)]
+                value = point.links.get(f.body, box.nominal)[box.fields.index(f.field)]
             if not f.contains(float(value)):
                 missed.append(f"{f.body}.{f.field}")
         return missed

@@ -20,11 +20,8 @@ import pinocchio as pin
 from ..errors import InputError
 from ..formats.uncertainty import BARYCENTRIC_FIELDS, PHYSICAL_FIELDS
 from .joint_dynamics import JointBox
+from .point import JOINTS, ParameterPoint, point_values
 from .robot import Robot
-
-#: The key of a parameter point (:meth:`ParameterBox.plant`) that holds the joint parameters, a
-#: ``(3, dof)`` array (armature, damping, friction); angle brackets cannot start a URDF link name.
-JOINTS = "<joints>"
 
 # PHYSICAL_FIELDS (mass, CoM in the link frame, inertia about the CoM in Pinocchio's component
 # order xx, xy, yy, xz, yz, zz) and BARYCENTRIC_FIELDS are the fields of the file format.
@@ -36,17 +33,15 @@ UNITS = {
 Kind = Literal["physical", "barycentric"]
 
 
-def link_points(point: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """The link and payload entries of a parameter point (without :data:`JOINTS`)."""
-    return {name: values for name, values in point.items() if name != JOINTS}
-
-
-def joint_values(box: ParameterBox, point: Mapping[str, np.ndarray]) -> dict[str, float]:
+def joint_values(
+    box: ParameterBox, point: ParameterPoint | Mapping[str, np.ndarray]
+) -> dict[str, float]:
     """``joint.field -> value`` of the uncertain joint parameters of a point (empty without)."""
     joints = box.joints
-    if joints is None or JOINTS not in point:
+    point = ParameterPoint.coerce(point, None if joints is None else joints.dof)
+    if joints is None or point.joints is None:
         return {}
-    values = np.asarray(point[JOINTS], dtype=float).reshape(3, joints.dof)
+    values = point.joints
     rows, columns = np.nonzero(joints.uncertain)
     return {joints.name(r, c): float(values[r, c]) for r, c in zip(rows, columns, strict=True)}
 
@@ -206,12 +201,13 @@ class ParameterBox:
 
     def plant(
         self,
-        robot: Robot | Mapping[str, np.ndarray] | None = None,
-        point: Mapping[str, np.ndarray] | None = None,
+        robot: Robot | ParameterPoint | Mapping[str, np.ndarray] | None = None,
+        point: ParameterPoint | Mapping[str, np.ndarray] | None = None,
     ) -> Robot:
-        """The robot at a parameter point (link or payload name -> coordinates of its box's kind,
-        and :data:`JOINTS` -> the ``(3, dof)`` joint parameters); what is not named stays
-        nominal. ``point=None`` gives the nominal robot.
+        """The robot at a parameter point (a :class:`ParameterPoint`, or the older ``dict`` of
+        link or payload name -> coordinates of its box's kind and :data:`JOINTS` -> the
+        ``(3, dof)`` joint parameters); what it does not name stays nominal. ``point=None``
+        gives the nominal robot.
 
         ``box.plant(point)`` uses the robot the box was parsed for; ``box.plant(robot, point)``
         (the older form) checks that ``robot`` has the links the box bounds.
@@ -235,29 +231,26 @@ class ParameterBox:
                     "robot",
                 )
         robot = self.nominal_robot(robot)
-        if not point:
+        if point is None:
             return robot
-        if JOINTS in point:
-            robot = robot.with_joint_parameters(
-                _point_values(point[JOINTS], JOINTS, (3, robot.dof))
-            )
-            point = {k: v for k, v in point.items() if k != JOINTS}
-            if not point:
-                return robot
+        point = ParameterPoint.coerce(point, robot.dof)
+        if point.joints is not None:
+            robot = robot.with_joint_parameters(point_values(point.joints, JOINTS, (3, robot.dof)))
+        if not point.links:
+            return robot
         boxed = {b.link: b for b in self.links}
         inertias = {}
-        for name, values in point.items():
-            values = _point_values(values, name, (10,))
+        for name, values in point.links.items():
             # Links without a box are given in physical coordinates.
             inertias[name] = (
                 boxed[name].inertia(values) if name in boxed else inertia_from_physical(values)
             )
         return robot.with_link_inertias(inertias)
 
-    def vertex(self, index: int) -> dict[str, np.ndarray]:
+    def vertex(self, index: int) -> ParameterPoint:
         """The ``index``-th vertex of the box over the uncertain coordinates (bit ``k`` of
         ``index`` picks lower (0) or upper (1) of the ``k``-th uncertain coordinate)."""
-        point, bit = {}, 0
+        point, joint_point, bit = {}, None, 0
         for box in self.links:
             values = box.nominal.copy()
             for k in np.flatnonzero(box.uncertain):
@@ -271,8 +264,8 @@ class ParameterBox:
                 chosen = joints.upper if (index >> bit) & 1 else joints.lower
                 values[row, column] = chosen[row, column]
                 bit += 1
-            point[JOINTS] = values
-        return point
+            joint_point = values
+        return ParameterPoint(point, joint_point)
 
     @property
     def n_uncertain(self) -> int:
@@ -281,32 +274,11 @@ class ParameterBox:
         joints = 0 if self.joints is None else int(self.joints.uncertain.sum())
         return int(sum(int(b.uncertain.sum()) for b in self.links)) + joints
 
-    def sample(self, rng: np.random.Generator) -> dict[str, np.ndarray]:
-        """A point drawn uniformly from the box (not necessarily physically consistent); the
-        joint parameters under :data:`JOINTS` when the box has joint intervals."""
+    def sample(self, rng: np.random.Generator) -> ParameterPoint:
+        """A point drawn uniformly from the box (not necessarily physically consistent), with
+        joint parameters when the box has joint intervals."""
         point = {b.link: rng.uniform(b.lower, b.upper) for b in self.links}
+        joints = None
         if self.joints is not None and self.joints.uncertain.any():
-            point[JOINTS] = rng.uniform(self.joints.lower, self.joints.upper)
-        return point
-
-
-def _point_values(values, name: str, shape: tuple[int, ...]) -> np.ndarray:
-    """The coordinates of one entry of a parameter point as floats of ``shape``.
-
-    Raises:
-        InputError: not numbers, another shape, or a non-finite entry (field ``point.NAME``).
-    """
-    try:
-        array = np.asarray(values, dtype=float)
-    except (TypeError, ValueError):
-        array = None
-    if array is None or array.shape != shape or not np.isfinite(array).all():
-        what = (
-            f"{shape[0]} finite numbers" if len(shape) == 1 else f"finite numbers of shape {shape}"
-        )
-        raise InputError(
-            f"{values!r} must be {what} (the coordinates of its box, in the order of "
-            "box.link_box(name).fields; 'joints': armature, damping and friction rows)",
-            field=f"point.{name}",
-        )
-    return array
+            joints = rng.uniform(self.joints.lower, self.joints.upper)
+        return ParameterPoint(point, joints)

@@ -20,7 +20,8 @@ from ..formats.uncertainty import JOINT_FIELDS, PHYSICAL_FIELDS
 from .catalog import shipped_file
 from .inertia import inertia_problem
 from .joint_dynamics import JointBox
-from .parameter_box import JOINTS, LinkBox, ParameterBox, link_points, physical_coordinates
+from .parameter_box import LinkBox, ParameterBox, physical_coordinates
+from .point import JOINTS, ParameterPoint
 from .robot import Robot
 
 
@@ -41,9 +42,7 @@ def check_file_arguments(path: Any, robot: Any, function: str, parser: str | Non
         )
 
 
-def load_parameter_point(
-    path: str | Path, robot: Robot, box: ParameterBox
-) -> dict[str, np.ndarray]:
+def load_parameter_point(path: str | Path, robot: Robot, box: ParameterBox) -> ParameterPoint:
     """Read a parameter-point file (:class:`urpc.formats.parameter_point.ParameterPointFile`, a
     true plant) for ``robot`` and ``box``: a path, or a shipped name (``"rr_planar"`` for its
     ``true_parameters.yaml``, ``"ur5/heavy_payload"``).
@@ -55,10 +54,10 @@ def load_parameter_point(
         payload: {mass: 2.0, com_z: 0.03}
 
     A ``joints:`` section gives joint parameters (``armature``, ``damping``, ``friction``).
-    Links and joints not listed stay at their nominal values. Returns link or payload name ->
-    coordinates (in the kind of that link's box, physical for links without a box), and
-    :data:`~urpc.model.parameter_box.JOINTS` -> the ``(3, dof)`` joint parameters when given,
-    for :meth:`ParameterBox.plant`.
+    Links and joints not listed stay at their nominal values. Returns the
+    :class:`~urpc.model.point.ParameterPoint` of the listed links and payloads (coordinates in
+    the kind of that link's box, physical for links without a box) and, when given, the
+    ``(3, dof)`` joint parameters, for :meth:`ParameterBox.plant`.
     """
     check_file_arguments(path, robot, "load_parameter_point", None)
     if not isinstance(box, ParameterBox):
@@ -114,9 +113,8 @@ def load_parameter_point(
                 field=fieldname,
             )
         point[name] = coordinates
-    if spec.joints:
-        point[JOINTS] = _joint_point(spec, nominal_robot, box, source)
-    return point
+    joints = _joint_point(spec, nominal_robot, box, source) if spec.joints else None
+    return ParameterPoint(point, joints)
 
 
 def _refuse_what_the_box_lacks(
@@ -162,7 +160,7 @@ def _joint_point(
 
 
 def box_excursions(
-    box: ParameterBox, point: Mapping[str, np.ndarray], robot: Robot | None = None
+    box: ParameterBox, point: ParameterPoint | Mapping[str, np.ndarray], robot: Robot | None = None
 ) -> dict[str, float]:
     """``link.field`` or ``joint.field`` -> distance [SI] outside ``box`` of each coordinate of
     ``point`` that is not in it (rounding of 1e-12 relative tolerated): links, payloads and the
@@ -182,17 +180,10 @@ def box_excursions(
             gap = float(distance[index])
             excursions[names(*index)] = gap if math.isfinite(gap) else math.inf
 
+    point = ParameterPoint.coerce(point)
     boxed = {b.link: b for b in box.links}
-    for name, values in point.items():
-        if name == JOINTS:
-            joints = box.joints
-            if joints is None and robot is not None:
-                joints = JointBox.exact(robot.joint_names, robot.joint_parameters)
-            if joints is None:
-                excursions[JOINTS] = math.inf
-            else:
-                record(joints.name, values, joints.lower, joints.upper)
-        elif name in boxed:
+    for name, values in point.links.items():
+        if name in boxed:
             b = boxed[name]
             record(lambda k, b=b: f"{b.link}.{b.fields[k]}", values, b.lower, b.upper)
         elif robot is not None and name in robot.link_names:
@@ -200,11 +191,19 @@ def box_excursions(
             record(lambda k, n=name: f"{n}.{PHYSICAL_FIELDS[k]}", values, nominal, nominal)
         else:
             excursions[name] = math.inf
+    if point.joints is not None:
+        joints = box.joints
+        if joints is None and robot is not None:
+            joints = JointBox.exact(robot.joint_names, robot.joint_parameters)
+        if joints is None:
+            excursions[JOINTS] = math.inf
+        else:
+            record(joints.name, point.joints, joints.lower, joints.upper)
     return excursions
 
 
 def outside_box(
-    box: ParameterBox, point: Mapping[str, np.ndarray], robot: Robot | None = None
+    box: ParameterBox, point: ParameterPoint | Mapping[str, np.ndarray], robot: Robot | None = None
 ) -> list[str]:
     """Names ``link.field`` / ``joint.field`` of the coordinates of ``point`` that lie outside
     ``box`` (:func:`box_excursions`)."""
@@ -217,13 +216,14 @@ PSEUDO_INERTIA_TOLERANCE = 1e-12
 MAX_DRAWS = 1000
 
 
-def physically_consistent(box: ParameterBox, point: Mapping[str, Any]) -> bool:
+def physically_consistent(box: ParameterBox, point: ParameterPoint | Mapping[str, Any]) -> bool:
     """Whether every link point of ``point`` is a realizable rigid body: its pseudo-inertia
     matrix (Pinocchio's ``PseudoInertia``) is positive semi-definite, and a massless point
     carries no first or second moment either; joint parameters (if any) are ``>= 0``."""
     import pinocchio as pin
 
-    for name, values in link_points(point).items():
+    point = ParameterPoint.coerce(point)
+    for name, values in point.links.items():
         try:
             link_box = box.link_box(name)
         except KeyError:
@@ -231,7 +231,7 @@ def physically_consistent(box: ParameterBox, point: Mapping[str, Any]) -> bool:
                 f"no box for link '{name}'; " + did_you_mean(name, [b.link for b in box.links]),
                 field=f"point.{name}",
             ) from None
-        parameters = link_box.standard_parameters(np.asarray(values, dtype=float))
+        parameters = link_box.standard_parameters(values)
         if not np.all(np.isfinite(parameters)):
             return False
         pseudo = pin.PseudoInertia.FromDynamicParameters(parameters).toMatrix()
@@ -241,13 +241,12 @@ def physically_consistent(box: ParameterBox, point: Mapping[str, Any]) -> bool:
             return False
         if parameters[0] <= 0 and np.abs(pseudo).max() > PSEUDO_INERTIA_TOLERANCE * scale:
             return False
-    joints = point.get(JOINTS)
-    return joints is None or bool(np.all(np.asarray(joints) >= 0))
+    return point.joints is None or bool(np.all(point.joints >= 0))
 
 
 def sample_rigid_point(
     box: ParameterBox, rng: np.random.Generator | int, tries: int = MAX_DRAWS
-) -> tuple[dict[str, np.ndarray], int]:
+) -> tuple[ParameterPoint, int]:
     """A point drawn uniformly from the rigid bodies of ``box``: uniform draws from the box,
     rejected until one is :func:`physically_consistent` (on a box that is partly no rigid body,
     e.g. wide mass and CoM intervals with a narrow inertia, a plain draw can be none).

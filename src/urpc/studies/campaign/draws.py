@@ -18,6 +18,7 @@ from ...model.parameter_point import (
     physically_consistent,
     sample_rigid_point,
 )
+from ...model.point import JOINTS, ParameterPoint
 from ...model.uncertainty import ParameterBox
 from ...wording import count
 from ..scenario import ScenarioSetup
@@ -37,7 +38,9 @@ class RunSpec:
         vertex: Vertex index (bit ``k`` picks the upper end of uncertain coordinate ``k``, as in
             :meth:`ParameterBox.vertex`), ``None`` for a uniform draw.
         seed: Seed of the run's disturbance sequence.
-        point: True parameters, link or payload name -> its 10 box coordinates.
+        point: True parameters, link or payload name -> its 10 box coordinates, and
+            ``"<joints>"`` -> the ``(3, dof)`` joint parameters row by row, when drawn
+            (:attr:`parameter_point` gives the :class:`~urpc.model.point.ParameterPoint`).
         q0: Initial joint positions [rad]; ``qd0``: velocities [rad/s].
         rejected: Physically inconsistent draws rejected before this one.
     """
@@ -50,6 +53,13 @@ class RunSpec:
     q0: tuple[float, ...]
     qd0: tuple[float, ...]
     rejected: int = 0
+
+    @property
+    def parameter_point(self) -> ParameterPoint:
+        """The run's true parameters as a :class:`~urpc.model.point.ParameterPoint`."""
+        links = {name: values for name, values in self.point.items() if name != JOINTS}
+        joints = self.point.get(JOINTS)
+        return ParameterPoint(links, None if joints is None else np.reshape(joints, (3, -1)))
 
 
 def draw_runs(
@@ -124,7 +134,7 @@ def draw_runs(
                 kind=kind,  # type: ignore[arg-type]
                 vertex=vertex,
                 seed=int(disturbance_seed.generate_state(1, np.uint64)[0]),
-                point={name: tuple(np.ravel(values).tolist()) for name, values in point.items()},
+                point={k: tuple(np.ravel(v).tolist()) for k, v in point.as_dict().items()},
                 q0=tuple(float(v) for v in setup.q0 + offset),
                 qd0=tuple(float(v) for v in setup.qd0),
                 rejected=rejected,

@@ -69,7 +69,7 @@ def run_one(task: RunTask) -> RunOutcome:
     start = time.thread_time()
     setup, controller = _prepared(task.document, task.source)
     spec = task.spec
-    point = {name: np.array(values) for name, values in spec.point.items()}
+    point = spec.parameter_point
     run_setup = dataclasses.replace(
         setup,
         scenario=setup.scenario.model_copy(update={"seed": spec.seed}),

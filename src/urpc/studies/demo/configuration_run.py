@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError, SimulationError
-from ...model.parameter_box import JOINTS, link_points
+from ...model.point import ParameterPoint
 from ...model.robot import Robot
 from ...sim.results import SimulationResult
 from ...sim.simulation import simulate
@@ -35,8 +35,8 @@ class ConfigurationRun:
     Attributes:
         arm: The synthesized configuration (assembly, models, controller, timing).
         plant: The true plant (a seeded, physically consistent draw from the box).
-        true_point: The drawn parameters (link or payload -> coordinates of its box, and
-            :data:`urpc.model.parameter_box.JOINTS` -> the drawn ``(3, dof)`` drives).
+        true_point: The drawn parameters (link or payload -> coordinates of its box, and the
+            drawn ``(3, dof)`` drives).
         trajectory: The desired trajectory (:func:`urpc.trajectories.generic_trajectory`).
         result: The simulation, or ``None`` when it diverged.
         failure: Why the simulation stopped, when it diverged.
@@ -44,7 +44,7 @@ class ConfigurationRun:
 
     arm: SynthesizedArm
     plant: Robot
-    true_point: dict[str, np.ndarray]
+    true_point: ParameterPoint
     trajectory: Trajectory
     result: SimulationResult | None
     failure: str | None = None
@@ -150,15 +150,18 @@ def initial_position(
         ) from None
 
 
-def describe_point(point: Mapping[str, np.ndarray], joint_names: Sequence[str] = ()) -> str:
+def describe_point(
+    point: ParameterPoint | Mapping[str, np.ndarray], joint_names: Sequence[str] = ()
+) -> str:
     """One line: each body's drawn coordinates, then each joint's drawn drive (armature
-    [kg m^2], damping [N m s/rad], friction [N m]) when the point has :data:`JOINTS`."""
+    [kg m^2], damping [N m s/rad], friction [N m]) when the point has joint parameters."""
+    point = ParameterPoint.coerce(point)
     parts = [
         f"{name}: " + ", ".join(f"{value:.6g}" for value in np.ravel(values))
-        for name, values in link_points(point).items()
+        for name, values in point.links.items()
     ]
-    if JOINTS in point:
-        values = np.asarray(point[JOINTS], dtype=float)
+    if point.joints is not None:
+        values = point.joints
         names = list(joint_names) or [f"joint {k + 1}" for k in range(values.shape[-1])]
         parts += [
             f"{name} drive: armature {a:.6g} kg m^2, damping {d:.6g} N m s/rad, "

@@ -203,9 +203,14 @@ def tool_change_run(
         )
     point_before = sample_true_parameters(first.box, seed)
     point_after = sample_true_parameters(second.box, seed + 1)
-    for link, values in point_before.items():  # the arm and its drives do not change
-        if _same_box(first.box, second.box, link):
-            point_after[link] = values
+    # The arm and its drives do not change.
+    kept = {k: v for k, v in point_before.links.items() if _same_box(first.box, second.box, k)}
+    joints = point_before.joints
+    if joints is None or not _same_box(first.box, second.box, JOINTS):
+        joints = point_after.joints
+    point_after = dataclasses.replace(
+        point_after, links={**point_after.links, **kept}, joints=joints
+    )
     plant_before = first.box.plant(point_before)
     plant_after = second.box.plant(point_after)
     joint_names = first.robot.joint_names

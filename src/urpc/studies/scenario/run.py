@@ -10,7 +10,8 @@ from ...control.base import Controller
 from ...errors import InputError, did_you_mean
 from ...formats.controller_options import IntervalOptions
 from ...formats.scenario import Scenario
-from ...model.parameter_box import JOINTS, joint_values, link_points
+from ...model.parameter_box import JOINTS, joint_values
+from ...model.point import ParameterPoint
 from .settings import CONTROLLERS
 from .setup import ScenarioSetup, build
 
@@ -152,7 +153,7 @@ def true_parameter_values(setup: ScenarioSetup) -> dict[str, dict[str, float]]:
     joints = joint_values(setup.box, setup.true_point)
     if joints:
         values[JOINTS] = joints
-    for name, coordinates in link_points(setup.true_point).items():
+    for name, coordinates in ParameterPoint.coerce(setup.true_point).links.items():
         try:
             link_box = setup.box.link_box(name)
         except KeyError:

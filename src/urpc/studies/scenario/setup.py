@@ -19,9 +19,10 @@ import numpy as np
 from ...errors import InputError
 from ...formats.base import FileFormat
 from ...formats.scenario import InitialState, Scenario
-from ...model.parameter_box import joint_values, link_points
+from ...model.parameter_box import joint_values
 from ...model.parameter_point import box_excursions as parameter_excursions
 from ...model.parameter_point import sample_rigid_point
+from ...model.point import ParameterPoint
 from ...model.robot import Robot, load_robot
 from ...model.uncertainty import UNITS, ParameterBox, load_parameter_point, load_uncertainty
 from ...trajectories import (
@@ -46,7 +47,8 @@ class ScenarioSetup:
         robot: The controller's nominal model (payloads of the box attached at their nominal).
         box: The parameter box (the controller's knowledge).
         plant: The true plant.
-        true_point: The true parameters (link -> coordinates of its box's kind; empty: nominal).
+        true_point: The true parameters (:class:`~urpc.model.point.ParameterPoint`; naming no
+            body and no joints: nominal).
         true_description: How the true parameters were chosen, for reports.
         trajectory: The desired trajectory.
         q0, qd0: The initial state [rad], [rad/s].
@@ -57,7 +59,7 @@ class ScenarioSetup:
     robot: Robot
     box: ParameterBox
     plant: Robot
-    true_point: dict[str, np.ndarray]
+    true_point: ParameterPoint
     true_description: str
     trajectory: Trajectory
     q0: np.ndarray
@@ -75,7 +77,9 @@ class ScenarioSetup:
         return not self.outside_box
 
 
-def box_excursions(box: ParameterBox, point: dict[str, np.ndarray]) -> dict[str, float]:
+def box_excursions(
+    box: ParameterBox, point: ParameterPoint | Mapping[str, np.ndarray]
+) -> dict[str, float]:
     """``link.field`` or ``joint.field`` -> distance [SI] outside ``box`` of the coordinates of
     ``point`` that are not in it, links, payloads and joint drives alike
     (:func:`urpc.model.parameter_point.box_excursions`)."""
@@ -167,12 +171,12 @@ def _fit(value: Any, dof: int, source: str | None, fieldname: str) -> np.ndarray
 
 def _true_point(
     scenario: Scenario, robot: Robot, box: ParameterBox, source: str | None
-) -> tuple[dict[str, np.ndarray], str]:
+) -> tuple[ParameterPoint, str]:
     true = scenario.true_parameters
     if isinstance(true, Path):
         return load_parameter_point(true, robot, box), f"true parameters from {true}"
     if true == "nominal":
-        return {}, "true parameters = nominal parameters (no model error)"
+        return ParameterPoint({}), "true parameters = nominal parameters (no model error)"
     seed = scenario.true_parameter_seed
     point, rejected = _sampled(box, seed, source)
     rejections = f"; {rejected} draws that were no rigid body rejected" if rejected else ""
@@ -182,10 +186,11 @@ def _true_point(
     )
 
 
-def describe_point(box: ParameterBox, point: Mapping[str, np.ndarray]) -> str:
+def describe_point(box: ParameterBox, point: ParameterPoint | Mapping[str, np.ndarray]) -> str:
     """``link2: mass = 8.18 kg, com_x = 0.507 m, iyy = 1.17 kg m^2`` (uncertain fields only)."""
+    point = ParameterPoint.coerce(point)
     parts = []
-    for name, coordinates in link_points(point).items():
+    for name, coordinates in point.links.items():
         link_box = box.link_box(name)
         fields = [
             f"{field_name} = {coordinates[k]:.6g} {UNITS.get(field_name, 'kg m^2')}"
@@ -201,7 +206,7 @@ def describe_point(box: ParameterBox, point: Mapping[str, np.ndarray]) -> str:
 
 def sample_true_parameters(
     box: ParameterBox, seed: int, source: str | None = None, tries: int = 1000
-) -> dict[str, np.ndarray]:
+) -> ParameterPoint:
     """A seeded uniform draw from the rigid bodies of ``box``
     (:func:`urpc.model.parameter_point.sample_rigid_point`, pseudo-inertia test).
 
@@ -213,7 +218,7 @@ def sample_true_parameters(
 
 def _sampled(
     box: ParameterBox, seed: int, source: str | None, tries: int = 1000
-) -> tuple[dict[str, np.ndarray], int]:
+) -> tuple[ParameterPoint, int]:
     try:
         return sample_rigid_point(box, np.random.default_rng(seed), tries)
     except InputError as exc:
