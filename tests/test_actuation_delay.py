@@ -103,7 +103,7 @@ def test_the_simulated_delay_is_the_virtual_robots(rr_rig):
     logged = loop.series()
     simulated = simulate(
         plant, controller, urpc.PaperTrajectory(), duration=0.5, q0=np.zeros(2),
-        integration_step=5e-4, actuation_delay=1,
+        solver=urpc.SolverOptions(integration_step=5e-4), actuation_delay=1,
     )  # fmt: skip
     assert len(simulated.t) == len(logged["q"])
     np.testing.assert_allclose(logged["q"], simulated.q, rtol=0, atol=1e-9)
@@ -171,7 +171,7 @@ def test_pure_inertia_is_stable_just_inside_the_delayed_limit_and_diverges_outsi
     limit = 2.0 * math.sin(math.pi / (2 * (2 * delay + 1)))
     options = dict(
         duration=samples * period, q0=[0.0], qd0=[1.0], actuation_delay=delay,
-        integration_step=period,
+        solver=urpc.SolverOptions(integration_step=period),
     )  # fmt: skip
     a = 0.97 * limit
     result = simulate(turntable, VelocityFeedback(a * PURE_INERTIA / period, period), AtRest(),

@@ -469,6 +469,6 @@ def test_simulate_refuses_a_max_state_that_is_not_a_positive_number(value):
     with pytest.raises(InputError) as caught:
         urpc.simulate(
             box.plant(rr), controller, urpc.trajectories.PaperTrajectory(), duration=0.01,
-            max_state=value,
+            solver=urpc.SolverOptions(max_state=value),
         )  # fmt: skip
     assert caught.value.field == "max_state"

@@ -72,7 +72,7 @@ def test_api_by_name_equals_api_by_path(rr):
     by_path = urpc.load_uncertainty(ROOT / "robots" / "rr_planar" / "uncertainty.yaml", rr)
     assert np.array_equal(by_name.links[0].upper, by_path.links[0].upper)
     point = urpc.load_parameter_point("rr_planar", rr, by_name)
-    assert point["link2"][0] == 10.0
+    assert point.links["link2"][0] == 10.0
 
 
 def test_shipped_data_of_the_robots_that_ship_it():

@@ -128,7 +128,7 @@ def test_direct_mode_states_a_seeded_consistent_true_plant(capsys):
     assert set(values) == {"mass", "com_x", "iyy"}
     scenario = load_scenario("rr_planar/s3_ic1")  # only for the rr box
     box = build(scenario).box
-    drawn = sample_true_parameters(box, seed=0)["link2"]
+    drawn = sample_true_parameters(box, seed=0).links["link2"]
     link = box.link_box("link2")
     for name, value in values.items():
         k = link.fields.index(name)

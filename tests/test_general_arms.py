@@ -40,7 +40,7 @@ def test_scenarios_describe_the_issue_setting(name):
     lower, upper = setup.robot.position_limits
     assert np.all(q >= lower) and np.all(q <= upper)
     if "heavy" in name:  # the hard corner: 3 kg at the far end of the box
-        np.testing.assert_allclose(setup.true_point["payload"][:4], [3.0, 0.02, 0.02, 0.1])
+        np.testing.assert_allclose(setup.true_point.links["payload"][:4], [3.0, 0.02, 0.02, 0.1])
 
 
 def test_ur5_meets_epsilon_with_the_default_settings():

@@ -21,6 +21,7 @@ from urpc.bounds import default_method, make_bound
 from urpc.control.base import Reference
 from urpc.control.synthesis import synthesize
 from urpc.errors import InputError
+from urpc.sim.options import SolverOptions
 from urpc.sim.simulation import simulate
 
 NOMINAL = dict(m2=5.0, lc2=0.5, I2=5 / 12)
@@ -235,7 +236,7 @@ def test_theorem1_lyapunov_decreases_outside_the_ball(rr, rr_box, true_plant):
         duration=2.0,
         q0=[0.3, -0.3],
         qd0=[0.0, 0.0],
-        output_rate=2000.0,
+        solver=SolverOptions(output_rate=2000.0),
     )
     r = (result.qd_desired - result.qd) + controller.Kr * result.error
     r_norm = np.linalg.norm(r, axis=1)

@@ -243,7 +243,7 @@ def test_rr_table_one_box_is_enclosed(rr, rr_box, rr_true_point):
     assert ratios.min() >= 1 - 1e-9
     # The paper's true plant (a vertex), against the textbook model, not Pinocchio.
     bound = RigorousBound(rr, rr_box)
-    true = rr_true_point["link2"]
+    true = rr_true_point.links["link2"]
     for _ in range(10):
         q, qd, qd_a, qdd_a = random_state(rng, 2)
         M, C, g = rr_closed_form(q, qd, true[0], true[1], true[6])

@@ -13,6 +13,7 @@ from conftest import RR_DIR
 from urpc.control.computed_torque import ComputedTorqueController
 from urpc.control.r_alpha import PAPER_BETAS, RAlphaController
 from urpc.errors import InputError
+from urpc.model.point import ParameterPoint
 from urpc.studies.scenario import (
     CONTROLLERS,
     PLANT_BACKENDS,
@@ -235,14 +236,14 @@ def test_sampled_true_parameters_are_seeded_and_inside_the_box(tmp_path):
     for seed in (1, 1, 2):
         document = minimal(true_parameters={"sample": {"seed": seed}})
         setup = build(load_scenario(write(tmp_path, document)))
-        point = setup.true_point["link2"]
+        point = setup.true_point.links["link2"]
         box = setup.box.link_box("link2")
         assert np.all(point >= box.lower) and np.all(point <= box.upper)
         draws.append(point)
     np.testing.assert_array_equal(draws[0], draws[1])
     assert not np.array_equal(draws[0], draws[2])
     nominal = build(load_scenario(write(tmp_path, minimal(true_parameters="nominal"))))
-    assert nominal.true_point == {}
+    assert nominal.true_point == ParameterPoint({})
     assert nominal.plant.link("link2").inertia.mass == pytest.approx(5.0)
 
 
@@ -351,7 +352,7 @@ def test_sampled_true_parameters_are_named_in_the_description(tmp_path):
     assert set(values) == {"mass", "com_x", "iyy"}  # the uncertain fields of Table I
     link = setup.box.link_box("link2")
     for name, value in values.items():
-        assert value == setup.true_point["link2"][link.fields.index(name)]
+        assert value == setup.true_point.links["link2"][link.fields.index(name)]
     description = setup.true_description
     assert "(seed 5)" in description
     assert f"mass = {values['mass']:.6g} kg" in description

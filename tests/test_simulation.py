@@ -18,6 +18,7 @@ from urpc.control.base import Controller, Reference
 from urpc.control.synthesis import synthesize
 from urpc.errors import InputError, SimulationError
 from urpc.sim.metrics import METRIC_NAMES
+from urpc.sim.options import SolverOptions
 from urpc.sim.sampled import ball_samples
 from urpc.sim.simulation import CONTINUOUS_METHOD, simulate
 
@@ -184,7 +185,7 @@ def test_rk4_step_is_converged_at_the_default(rr, rr_box, true_plant):
             q0=[0, 0],
             qd0=[0, 0],
             disturbance_bound=10.0,
-            integration_step=step,
+            solver=SolverOptions(integration_step=step),
         )
         for step in (1e-4, 1e-5)
     ]
@@ -219,8 +220,7 @@ def test_continuous_tolerances_are_converged(rr, rr_box, true_plant):
             duration=4.0,
             q0=[0, 0],
             qd0=[0, 0],
-            rtol=rtol,
-            atol=atol,
+            solver=SolverOptions(rtol=rtol, atol=atol),
         )
         for rtol, atol in ((1e-8, 1e-10), (5e-9, 5e-11))
     ]
@@ -357,7 +357,7 @@ def test_invalid_arguments_name_the_field(true_plant):
         (None, dict(duration=0.0), "duration"),
         (None, dict(duration=1.0, q0=[0, 0, 0]), "q0"),
         (None, dict(duration=1.0, torque_limit=0.0), "torque_limit"),
-        (None, dict(duration=1.0, method="Euler"), "method"),
+        (None, dict(duration=1.0, solver=SolverOptions(method="Euler")), "method"),
         (1e-3, dict(duration=1.0, plant_backend="bullet"), "plant"),
         (None, dict(duration=1.0, plant_backend="mujoco"), "plant"),  # continuous time
         (None, dict(duration=1.0, controller_state0=[1.0]), "controller_state0"),  # static law

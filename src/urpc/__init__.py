@@ -62,6 +62,7 @@ _LAZY = {
     "METRIC_NAMES": (".sim.metrics", "METRIC_NAMES"),
     "SimulationResult": (".sim.results", "SimulationResult"),
     "simulate": (".sim.simulation", "simulate"),
+    "SolverOptions": (".sim.options", "SolverOptions"),
     "PaperTrajectory": (".trajectories", "PaperTrajectory"),
     "QuinticTrajectory": (".trajectories", "QuinticTrajectory"),
     "Reference": (".trajectories", "Reference"),
@@ -104,6 +105,7 @@ __all__ = [
     "generic_trajectory",
     "home_configuration",
     "SimulationResult",
+    "SolverOptions",
     "simulate",
     "synthesize",
     "search_gains",
@@ -167,6 +169,7 @@ if TYPE_CHECKING:  # static type checkers and IDEs see the eager imports
     from .robot.safety import SafetyLayer
     from .robot.watchdog import Watchdog
     from .sim.metrics import METRIC_NAMES
+    from .sim.options import SolverOptions
     from .sim.results import SimulationResult
     from .sim.simulation import simulate
     from .studies.scenario import load_scenario

@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -119,6 +119,21 @@ class SimulationResult:
             step_time_median=self.step_time_median,
             wall_time=self.wall_time,
         )
+
+    def labelled(self, *, scenario: str | None = None, plant: str | None = None):
+        """This result with the report's labels: the ``scenario`` name and the ``plant``
+        description (``None`` keeps the present one); the series are shared, not copied.
+
+        Raises:
+            InputError: a label that is not a string (the field named).
+        """
+        labels = {"scenario": scenario, "plant": plant}
+        for name, value in labels.items():
+            if value is not None and not isinstance(value, str):
+                raise InputError(
+                    f"{value!r} is a {type(value).__name__}; a label is a string", field=name
+                )
+        return replace(self, **{k: v for k, v in labels.items() if v is not None})
 
     def summary(self) -> dict[str, Any]:
         """The metrics plus ``epsilon`` and ``controller`` (the content of ``summary.json``)."""

@@ -10,14 +10,14 @@ the period is never given a second time here.
 
 * **Continuous time** (``sample_period=None``, the paper's scenario 1): the plant state and the
   controller's internal state form one ODE, integrated by :func:`scipy.integrate.solve_ivp` with
-  tight tolerances; series are recorded on a fixed output grid (``output_rate``, default 1 kHz)
+  tight tolerances; series are recorded on a fixed output grid (``solver.output_rate``, 1 kHz)
   from the solver's dense output, the torque being re-evaluated at each grid point.
 * **Sampled** (scenarios 2, 3): at each sample ``t_k = k T`` the controller reads ``(q, qd)``,
   its output is held (zero-order hold) over ``[t_k, t_k + T)`` together with a disturbance ``d_k``
   drawn uniformly in the ball ``||d|| <= disturbance_bound`` (seeded), and a
-  :class:`~urpc.sim.plants.Plant` of the chosen backend (``plant_backend``: ``pinocchio``, the
-  reference, or the independent ``mujoco`` one) integrates the period by classical Runge-Kutta 4
-  with steps of at most ``integration_step``. Under a held torque the plant alone is not stiff, so
+  stepper (:class:`~urpc.sim.plants.Plant`) of the chosen backend (``plant_backend``:
+  ``pinocchio``, the reference, or the independent ``mujoco`` one) integrates the period by
+  classical Runge-Kutta 4 with steps of at most ``solver.integration_step``. Under a held torque the plant alone is not stiff, so
   RK4 with ``1e-4`` s steps is accurate to far below the tracking tolerances
   (``tests/test_simulation.py`` compares it with ten times finer steps). The controller's state
   advances once per sample (:meth:`Controller.advance`).
@@ -30,6 +30,9 @@ the period is never given a second time here.
   would switch the torque inside a period, which a zero-order hold does not model. The default is
   the delay the law predicts over (``controller.delay``: 0, or 1 for the delayed law).
   ``urpc.certify``'s argument covers no delay (docs/sampled-data.md §3).
+
+The integrator's settings are one :class:`~urpc.sim.options.SolverOptions` (``solver=``); the
+report's labels are set on the result (:meth:`SimulationResult.labelled`).
 
 A run that diverges (a non-finite value, ``|q|`` or ``|qd|`` above ``max_state``, a solver failure)
 raises :class:`~urpc.errors.SimulationError` naming the time and the state.
@@ -50,7 +53,13 @@ from ..model.robot import Robot
 from ..trajectories import Trajectory
 from ..validation import check_run_length, check_trajectory_dof, finite_vector, positive_number
 from .closed_loop import RunSetup
-from .continuous import CONTINUOUS_ATOL, CONTINUOUS_METHOD, CONTINUOUS_RTOL, run_continuous
+from .continuous import (  # noqa: F401 (the defaults, read here by older code)
+    CONTINUOUS_ATOL,
+    CONTINUOUS_METHOD,
+    CONTINUOUS_RTOL,
+    run_continuous,
+)
+from .options import SolverOptions, legacy_arguments
 from .plants import PLANTS, make_plant
 from .progress import SimulationProgress
 from .results import SimulationResult
@@ -70,18 +79,12 @@ def simulate(
     seed: int = 0,
     torque_limit: float | np.ndarray | None = None,
     epsilon: float | None = None,
-    method: str = CONTINUOUS_METHOD,
-    rtol: float = CONTINUOUS_RTOL,
-    atol: float = CONTINUOUS_ATOL,
-    output_rate: float = 1000.0,
-    integration_step: float = 1e-4,
-    max_state: float = 1e4,
-    scenario: str = "",
-    plant_description: str | None = None,
-    progress: bool | Callable[[float], Any] | Any | None = None,
     plant_backend: str = "pinocchio",
     controller_state0: np.ndarray | None = None,
     actuation_delay: int | None = None,
+    solver: SolverOptions | None = None,
+    progress: bool | Callable[[float], Any] | Any | None = None,
+    **deprecated: Any,
 ) -> SimulationResult:
     """Simulate ``plant`` under ``controller`` tracking ``trajectory``.
 
@@ -103,20 +106,9 @@ def simulate(
         torque_limit: Per-joint bound [N m] (scalar or ``dof`` values) the command is clipped to;
             ``None`` for no limit.
         epsilon: Required precision [rad] for the metrics; defaults to ``controller.epsilon``.
-        method, rtol, atol: ``solve_ivp`` method and tolerances (continuous time).
-        output_rate: Recording rate [Hz] of a continuous run.
-        integration_step: Largest RK4 step [s] inside one sample period.
-        max_state: Bound on ``|q|`` [rad] and ``|qd|`` [rad/s] (the norm of ``(q, qd)`` in a sampled
-            run) beyond which the run counts as diverged; the default 1e4 is far beyond any arm
-            and keeps a diverging continuous run from crawling through ever stiffer dynamics.
-        scenario: Scenario name stored in the result.
-        plant_description: Text describing the true parameters (default: the plant's link masses
-            and centers of mass).
-        progress: ``None``; ``True`` for a tqdm bar on stderr; a callable receiving the fraction
-            done in ``[0, 1]``; or a tqdm-like object (``update``, ``total``), advanced by
-            ``total`` times the fraction done (``total`` is set to 100 when it is ``None``).
-        plant_backend: Plant of a sampled run, a key of :data:`urpc.sim.plants.PLANTS`
-            (``pinocchio`` or ``mujoco``); continuous time needs ``pinocchio``.
+        plant_backend: The backend that steps ``plant`` in a sampled run, a key of
+            :data:`urpc.sim.plants.PLANTS` (``pinocchio`` or ``mujoco``); continuous time needs
+            ``pinocchio``.
         controller_state0: The controller's internal state at ``t = 0`` (length
             ``controller.n_states``), e.g. to continue a run after a tool change; ``None`` uses
             ``controller.initial_state()``.
@@ -125,6 +117,18 @@ def simulate(
             ``[t_{k+d}, t_{k+d+1})``, a zero torque over the first ``d`` periods. ``None``: the
             delay the law predicts over (``controller.delay``, 0 for an undelayed law). Recorded
             as ``info["actuation_delay"]``; a delay > 0 needs a sampled controller.
+        solver: The integrator's settings (:class:`~urpc.sim.options.SolverOptions`: method,
+            tolerances, output rate, RK4 step, divergence bound); ``None``: the defaults.
+        progress: ``None``; ``True`` for a tqdm bar on stderr; a callable receiving the fraction
+            done in ``[0, 1]``; or a tqdm-like object (``update``, ``total``), advanced by
+            ``total`` times the fraction done (``total`` is set to 100 when it is ``None``).
+        **deprecated: The older keywords, for one release (a ``DeprecationWarning`` each):
+            ``method``, ``rtol``, ``atol``, ``output_rate``, ``integration_step`` and
+            ``max_state`` (now ``solver=SolverOptions(...)``), ``scenario`` and
+            ``plant_description`` (now ``simulate(...).labelled(scenario=..., plant=...)``).
+
+    The result's ``scenario`` is empty and its ``plant`` describes the plant's link masses and
+    centers of mass; :meth:`SimulationResult.labelled` sets others.
 
     Raises:
         InputError: an argument out of range (the message names it).
@@ -132,6 +136,7 @@ def simulate(
     """
     start = time.perf_counter()
     _check_parts(plant, controller, trajectory)
+    solver, labels = legacy_arguments(solver, deprecated)
     delay = actuation_delay_of(controller, actuation_delay)
     n = plant.dof
     reference0 = trajectory.reference(0.0)
@@ -165,8 +170,7 @@ def simulate(
     if not valid_seed:
         raise InputError(f"{seed!r} is not an integer >= 0", field="seed")
     if sample_period is None:
-        rate = positive_number("output_rate", output_rate, "a finite number > 0 [Hz]")
-        check_run_length(duration, None, rate)
+        check_run_length(duration, None, solver.output_rate)
     else:
         check_run_length(duration, sample_period)
     limit = None
@@ -200,7 +204,6 @@ def simulate(
             "with a sample_period, or use the pinocchio plant for continuous time",
             field="plant",
         )
-    max_state = positive_number("max_state", max_state, "a finite number > 0 [rad, rad/s]")
     state0 = controller.initial_state()
     if controller_state0 is not None:
         state0 = finite_vector("controller_state0", controller_state0, controller.n_states)
@@ -208,14 +211,14 @@ def simulate(
         controller=controller.name,
         epsilon=epsilon,
         seed=int(seed),
-        scenario=scenario,
-        plant=plant_description if plant_description is not None else describe_plant(plant),
+        scenario=labels.get("scenario", ""),
+        plant=describe_plant(plant) if labels.get("plant") is None else labels["plant"],
         disturbance_bound=disturbance_bound,
         torque_limit=None if limit is None else tuple(float(x) for x in limit),
     )
     bar = SimulationProgress(progress)
     setup = RunSetup(
-        plant, controller, trajectory, duration, q0, qd0, state0, limit, max_state, bar
+        plant, controller, trajectory, duration, q0, qd0, state0, limit, solver.max_state, bar
     )
     try:
         if sample_period is None:
@@ -226,7 +229,9 @@ def simulate(
                     "continuous time",
                     field="disturbance_bound",
                 )
-            series, info = run_continuous(setup, method, rtol, atol, rate)
+            series, info = run_continuous(
+                setup, solver.method, solver.rtol, solver.atol, solver.output_rate
+            )
         else:
             if sample_period > duration:
                 raise InputError(
@@ -234,8 +239,7 @@ def simulate(
                     f"{duration!r} s",
                     field="sample_period",
                 )
-            step = positive_number("integration_step", integration_step, "a finite number > 0 [s]")
-            stepper = make_plant(plant_backend, plant, max_step=step)
+            stepper = make_plant(plant_backend, plant, max_step=solver.integration_step)
             series, info = run_sampled(
                 setup, stepper, disturbance_bound, int(seed), disturbance, delay
             )

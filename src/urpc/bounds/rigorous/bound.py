@@ -10,6 +10,7 @@ from flint import arb, ctx
 
 from ...errors import InputError, did_you_mean
 from ...model.joint_dynamics import STICTION_VELOCITY, JointBox
+from ...model.point import ParameterPoint
 from ...model.regressor import state_vector_error
 from ...model.robot import Robot
 from ...model.uncertainty import ParameterBox, physical_coordinates
@@ -139,19 +140,26 @@ class RigorousBound(BoundMethod):
         qd: np.ndarray,
         qd_a: np.ndarray,
         qdd_a: np.ndarray,
-        point: Mapping[str, np.ndarray] | None = None,
+        point: ParameterPoint | Mapping[str, np.ndarray] | None = None,
     ) -> list[arb]:
         """Balls containing ``M(q) qdd_a + C(q, qd) qd_a + g(q)`` [N m or N] of the robot at a
-        parameter point (link name -> coordinates in the kind of that link's box, physical
-        ``PHYSICAL_FIELDS`` for a link without a box; links not named stay nominal), as in
-        :meth:`ParameterBox.plant`. The point version of the enclosure, for validation against
-        Pinocchio.
+        parameter point (a :class:`~urpc.model.point.ParameterPoint` or its older ``dict``: link
+        name -> coordinates in the kind of that link's box, physical ``PHYSICAL_FIELDS`` for a
+        link without a box; links not named stay nominal), as in :meth:`ParameterBox.plant`. The
+        point version of the enclosure, for validation against Pinocchio.
 
         Raises:
-            InputError: a vector of the wrong shape, an unknown link name in ``point``.
+            InputError: a vector of the wrong shape, an unknown link name in ``point``, or joint
+                parameters in it (the rigid-body torque has none).
         """
+        point = ParameterPoint({}) if point is None else ParameterPoint.coerce(point)
+        if point.joints is not None:
+            raise InputError(
+                "torque_balls is the rigid-body torque: give a point without joint parameters",
+                field="point",
+            )
         with ctx.workprec(PRECISION):
-            bodies = self._nominal_bodies if not point else self._body_parameters(point)
+            bodies = self._body_parameters(point.links) if point.links else self._nominal_bodies
             poses, motions = self._forward(*self._state(q, qd, qd_a, qdd_a))
             forces = [
                 body_force(body, False, *motion)

@@ -126,9 +126,10 @@ def run_configuration(
             disturbance_bound=disturbance_bound,
             seed=seed,
             epsilon=epsilon,
-            scenario=arm.name,
-            plant_description=f"{arm.name}: {describe_point(point, arm.robot.joint_names)}",
             progress=progress,
+        ).labelled(
+            scenario=arm.name,
+            plant=f"{arm.name}: {describe_point(point, arm.robot.joint_names)}",
         )
     except SimulationError as exc:
         return ConfigurationRun(arm, plant, point, trajectory, None, str(exc))

@@ -242,10 +242,8 @@ def tool_change_run(
                 disturbance_bound=disturbance_bound,
                 seed=seed + k,
                 epsilon=epsilon,
-                scenario=f"{first.name} -> {second.name}",
-                plant_description=described[id(plant)],
                 progress=report.part(k, len(plan)),
-            )
+            ).labelled(scenario=f"{first.name} -> {second.name}", plant=described[id(plant)])
             segments.append(segment)
             clock += float(segment.t[-1])
             q0, qd0 = segment.q[-1], segment.qd[-1]

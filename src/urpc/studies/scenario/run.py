@@ -127,12 +127,10 @@ def simulate_setup(
         seed=scenario.seed,
         torque_limit=setup.torque_limit,
         epsilon=scenario.epsilon,
-        scenario=scenario.name,
-        plant_description=setup.true_description,
         progress=progress,
         plant_backend=scenario.plant,
         actuation_delay=scenario.actuation_delay,
-    )
+    ).labelled(scenario=scenario.name, plant=setup.true_description)
     info = {
         **result.info,
         "true_parameters": true_parameter_values(setup),
