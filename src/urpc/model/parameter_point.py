@@ -1,4 +1,5 @@
-"""Parameter-point files: one point of an uncertainty box (a true plant), read against the box.
+"""Parameter-point files: one point of an uncertainty box (the parameters of a true plant), read
+against the box.
 
 The names of the uncertainty format with single numbers (:class:`urpc.formats.parameter_point.
 ParameterPointFile`); what is not given stays nominal.
@@ -43,9 +44,9 @@ def check_file_arguments(path: Any, robot: Any, function: str, parser: str | Non
 
 
 def load_parameter_point(path: str | Path, robot: Robot, box: ParameterBox) -> ParameterPoint:
-    """Read a parameter-point file (:class:`urpc.formats.parameter_point.ParameterPointFile`, a
-    true plant) for ``robot`` and ``box``: a path, or a shipped name (``"rr_planar"`` for its
-    ``true_parameters.yaml``, ``"ur5/heavy_payload"``).
+    """Read a parameter-point file (:class:`urpc.formats.parameter_point.ParameterPointFile`, the
+    parameters of a true plant) for ``robot`` and ``box``: a path, or a shipped name
+    (``"rr_planar"`` for its ``true_parameters.yaml``, ``"ur5/heavy_payload"``).
 
     The file uses the names of the uncertainty format, with single numbers::
 

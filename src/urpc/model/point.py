@@ -1,5 +1,5 @@
-"""A parameter point: one true plant inside (or near) a :class:`~urpc.model.parameter_box.
-ParameterBox`, typed.
+"""A parameter point: the parameters of one true plant inside (or near) a
+:class:`~urpc.model.parameter_box.ParameterBox`, typed.
 
 A :class:`ParameterPoint` holds, per link or payload, the 10 coordinates of that body (in the kind
 of its box: physical or barycentric, physical for a body without a box), and optionally the
@@ -33,7 +33,8 @@ JOINTS = "<joints>"
 
 @dataclass(frozen=True, eq=False, repr=False)
 class ParameterPoint:
-    """One point of a parameter box (a true plant): what it does not name stays nominal.
+    """One point of a parameter box, the parameters of a true plant (:meth:`ParameterBox.plant`
+    builds that robot): what the point does not name stays nominal.
 
     Attributes:
         links: Link or payload name -> its 10 coordinates (the kind of its box, in the order of

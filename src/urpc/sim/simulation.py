@@ -14,11 +14,11 @@ the period is never given a second time here.
   from the solver's dense output, the torque being re-evaluated at each grid point.
 * **Sampled** (scenarios 2, 3): at each sample ``t_k = k T`` the controller reads ``(q, qd)``,
   its output is held (zero-order hold) over ``[t_k, t_k + T)`` together with a disturbance ``d_k``
-  drawn uniformly in the ball ``||d|| <= disturbance_bound`` (seeded), and a
-  stepper (:class:`~urpc.sim.plants.Plant`) of the chosen backend (``plant_backend``:
-  ``pinocchio``, the reference, or the independent ``mujoco`` one) integrates the period by
-  classical Runge-Kutta 4 with steps of at most ``solver.integration_step``. Under a held torque the plant alone is not stiff, so
-  RK4 with ``1e-4`` s steps is accurate to far below the tracking tolerances
+  drawn uniformly in the ball ``||d|| <= disturbance_bound`` (seeded), and a stepper
+  (:class:`~urpc.sim.plants.Plant`) of the chosen backend (``plant_backend``: ``pinocchio``, the
+  reference, or the independent ``mujoco`` one) integrates the period by classical Runge-Kutta 4
+  with steps of at most ``solver.integration_step``. Under a held torque the plant alone is not
+  stiff, so RK4 with ``1e-4`` s steps is accurate to far below the tracking tolerances
   (``tests/test_simulation.py`` compares it with ten times finer steps). The controller's state
   advances once per sample (:meth:`Controller.advance`).
 * **Actuation delay** (``actuation_delay``, sampled runs): a whole number ``d`` of samples
