@@ -57,9 +57,10 @@ class RunSpec:
     @property
     def parameter_point(self) -> ParameterPoint:
         """The run's true parameters as a :class:`~urpc.model.point.ParameterPoint`."""
-        links = {name: values for name, values in self.point.items() if name != JOINTS}
-        joints = self.point.get(JOINTS)
-        return ParameterPoint(links, None if joints is None else np.reshape(joints, (3, -1)))
+        point = dict(self.point)
+        if JOINTS in point:  # stored row by row
+            point[JOINTS] = np.reshape(point[JOINTS], (3, -1))
+        return ParameterPoint.coerce(point)
 
 
 def draw_runs(
