@@ -20,7 +20,8 @@ import pinocchio as pin
 from ..errors import InputError
 from ..formats.uncertainty import BARYCENTRIC_FIELDS, PHYSICAL_FIELDS
 from .joint_dynamics import JointBox
-from .point import JOINTS, ParameterPoint, point_values
+from .point import JOINTS as JOINTS  # the older point key, read from here
+from .point import ParameterPoint
 from .robot import Robot
 
 # PHYSICAL_FIELDS (mass, CoM in the link frame, inertia about the CoM in Pinocchio's component
@@ -235,7 +236,7 @@ class ParameterBox:
             return robot
         point = ParameterPoint.coerce(point, robot.dof)
         if point.joints is not None:
-            robot = robot.with_joint_parameters(point_values(point.joints, JOINTS, (3, robot.dof)))
+            robot = robot.with_joint_parameters(point.joints)
         if not point.links:
             return robot
         boxed = {b.link: b for b in self.links}

@@ -112,13 +112,15 @@ class ParameterPoint:
     @classmethod
     def coerce(cls, point: ParameterPoint | Mapping[str, Any], dof: int | None = None):
         """``point`` as a :class:`ParameterPoint`: itself, or the older ``dict`` form (link name
-        -> coordinates, :data:`JOINTS` -> the joint parameters, of ``(3, dof)`` when ``dof`` is
-        given) converted.
+        -> coordinates, :data:`JOINTS` -> the joint parameters) converted; with ``dof``, its
+        joint parameters must be ``(3, dof)``.
 
         Raises:
             InputError: not a point (field ``point``), or the shapes of :class:`ParameterPoint`.
         """
         if isinstance(point, ParameterPoint):
+            if point.joints is not None and dof is not None:
+                point_values(point.joints, JOINTS, (3, dof))
             return point
         if not isinstance(point, Mapping):
             raise InputError(
