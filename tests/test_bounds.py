@@ -185,7 +185,7 @@ def test_rr_enclosure_contains_the_textbook_model(rr, rr_box, method):
     rng = np.random.default_rng(7)
     link2 = rr_box.link_box("link2")  # coordinates: mass, com_x = lc2, iyy = I2
     nominal = link2.nominal
-    points = [p["link2"] for p in sample_points(rr_box, rng, 300, 0)]
+    points = [p.links["link2"] for p in sample_points(rr_box, rng, 300, 0)]
     bound = build(method, rr, rr_box)
     for scale in (1.0, 1.0, 1.0, 20.0):
         q, qd, qd_a, qdd_a = random_state(rng, 2, scale)

@@ -41,7 +41,7 @@ def _saturated(controller) -> np.ndarray:
 def _inside(piece, point) -> bool:
     """The parameter point lies in this piece of the box (every link's coordinates)."""
     for link in piece.links:
-        value = point.get(link.link)
+        value = point.links.get(link.link)
         if value is not None and not (
             np.all(value >= link.lower - 1e-12) and np.all(value <= link.upper + 1e-12)
         ):

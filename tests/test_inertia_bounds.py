@@ -43,7 +43,7 @@ def test_bounds_enclose_every_sampled_plant(ur5, name):
     checked = 0
     for k in range(200):
         point = box.vertex(int(rng.integers(2**box.n_uncertain))) if k % 2 else box.sample(rng)
-        if not all(_physical(b.inertia(point[b.link])) for b in box.links):
+        if not all(_physical(b.inertia(point.links[b.link])) for b in box.links):
             continue
         plant = box.plant(ur5, point)
         q = configurations[k % len(configurations)]

@@ -109,6 +109,10 @@ def test_reading_a_point_as_a_dict_still_works_with_a_warning(ur5_drives):
         assert JOINTS in point and "payload" in point
     with pytest.warns(DeprecationWarning):
         assert dict(point.items()).keys() == point.as_dict().keys() == set(point.keys())
+    with pytest.warns(DeprecationWarning, match=r"point\.get\('payload'\)"):
+        np.testing.assert_array_equal(point.get("payload"), point.links["payload"])
+    with pytest.warns(DeprecationWarning):
+        assert point.get("nothing", 5) == 5 and len(list(point.values())) == len(point.links) + 1
 
 
 def test_shape_errors_name_the_entry_as_before(rr, rr_box, ur5_drives):

@@ -44,9 +44,8 @@ def result(rr, rr_box, rr_true_point):
         qd0=[0, 0],
         disturbance_bound=10.0,
         seed=3,
-        scenario="scenario 3",
         torque_limit=400,
-    )
+    ).labelled(scenario="scenario 3")
 
 
 SUMMARY_KEYS = {*METRIC_NAMES, "phi", "kappa", "epsilon", "controller"}

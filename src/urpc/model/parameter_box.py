@@ -34,6 +34,12 @@ UNITS = {
 Kind = Literal["physical", "barycentric"]
 
 
+def link_points(point: ParameterPoint | Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The link and payload entries of a parameter point (``point.links`` of a
+    :class:`ParameterPoint`; kept for older callers)."""
+    return dict(ParameterPoint.coerce(point).links)
+
+
 def joint_values(
     box: ParameterBox, point: ParameterPoint | Mapping[str, np.ndarray]
 ) -> dict[str, float]:

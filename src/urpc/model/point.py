@@ -161,15 +161,22 @@ class ParameterPoint:
         joints = "None" if self.joints is None else _listed(self.joints)
         return f"ParameterPoint(links={{{links}}}, joints={joints})"
 
-    # The older dict form, read for one release: point[name], name in point, keys(), items().
+    # The older dict form, read for one release: point[name], name in point, get, keys, values,
+    # items (the dict of as_dict(), with a DeprecationWarning).
     def __getitem__(self, name: str) -> np.ndarray:
         return self._legacy(f"point[{name!r}]")[name]
 
     def __contains__(self, name: object) -> bool:
         return name in self._legacy(f"{name!r} in point")
 
+    def get(self, name: str, default: Any = None) -> Any:
+        return self._legacy(f"point.get({name!r})").get(name, default)
+
     def keys(self):
         return self._legacy("point.keys()").keys()
+
+    def values(self):
+        return self._legacy("point.values()").values()
 
     def items(self):
         return self._legacy("point.items()").items()
