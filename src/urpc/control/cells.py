@@ -90,6 +90,7 @@ class CellFloor:
         self._armature = np.stack([np.asarray(m.model.armature, dtype=float) for m in models])
         self._links = [[link_parameters(robot, b) for b in p.uncertain_links] for p in self.pieces]
         self._plant_hull = plant_hull(robot, box)
+        self._piece_hulls = [plant_hull(robot, piece) for piece in self.pieces]
         self._cache: dict[tuple, dict] = {}
         self._tube_cache: dict[tuple, dict] = {}
 
@@ -185,24 +186,29 @@ class CellFloor:
             return self._tube_cache[key]
         cells = self.cells
         q, qd_a, qdd_a, _ = self._states(tube, 0.0, extension)
-        models, model_slopes = self._inertia_models(q.val)
+        reference_q = self._states(0.0, 0.0, extension)[0].val
+        models, model_slopes = self._inertia_models(q.val, reference_q.rad, tube)
         nominal, law = models[0], models[1]
         # d/dt w = (rate along the reference at a fixed e) + (Jacobian along e) ed.
         reference = self._states(tube, 0.0, extension, along_reference=True)
         Y = self.regressor.slotine_li(reference[0], reference[1], reference[1], reference[2])
         center, tube_jacobian = self._mismatch_parts(tube, extension)
         hull = self._plant_hull
-        mismatch = Ball(hull.mid - self._parameters[0], hull.rad)
-        # The plant's Coriolis matrix (every plant of the box, over the plant's velocity box,
-        # affine in its radii) and the Coriolis mismatch along qd_a, as centered forms.
-        # Through each piece's M_L factor (cell by cell chunks, see coriolis_coefficients).
+        # The plant's Coriolis matrix (every plant of the piece, over the plant's velocity box,
+        # affine in its radii) and the Coriolis mismatch along qd_a, as centered forms over each
+        # piece's own parameter hull, through the piece's M_L factor (cell by cell chunks, see
+        # coriolis_coefficients).
         lowers = [models[2 + 2 * k] for k in range(len(self._links))]
-        coriolis, coriolis_mismatch = coriolis_coefficients(
-            self.regressor,
-            q.val,
-            [(q.dot.mid, hull), (qd_a.val.mid, mismatch)],
-            [lower.inverse_factor for lower in lowers],
-        )
+        forms = [
+            (q.dot.mid, piece_hull, lower.inverse_factor)
+            for piece_hull, lower in zip(self._piece_hulls, lowers, strict=True)
+        ] + [
+            (qd_a.val.mid, Ball(piece_hull.mid - self._parameters[0], piece_hull.rad),
+             lower.inverse_factor)
+            for piece_hull, lower in zip(self._piece_hulls, lowers, strict=True)
+        ]  # fmt: skip
+        coefficients = coriolis_coefficients(self.regressor, q.val, forms)
+        coriolis, coriolis_mismatch = coefficients[: len(lowers)], coefficients[len(lowers) :]
         # d/dt of the nominal torque Y_SL pi0 (held over the period while the reference moves).
         pi0 = Ball.point(self._parameters[0])
         torque_rate = matvec(Y.dot, pi0)
@@ -323,7 +329,7 @@ class CellFloor:
         over the cells at ``e = 0``: what Theorem 1 and the paper law's condition need, without
         the mismatch and Coriolis enclosures."""
         q, _, _, _ = self._states(0.0, 0.0, extension)
-        models, _ = self._inertia_models(q.val)
+        models, _ = self._inertia_models(q.val, q.val.rad, 0.0)
         lower, upper = math.inf, 0.0
         for low, high in zip(models[2::2], models[3::2], strict=True):
             lam_L = np.where(low.valid, low.lam_min * (1 - low.eps), -math.inf)
@@ -331,10 +337,14 @@ class CellFloor:
             upper = max(upper, float(np.max(high.lam_max * (1 + high.eps))) * (1 + LAPACK_MARGIN))
         return {"cells": float(self.cells), "lambda_L": lower, "lambda_U": upper}
 
-    def _inertia_models(self, q: Ball) -> tuple[list[InertiaModel], list[np.ndarray]]:
+    def _inertia_models(
+        self, q: Ball, reference_radii: np.ndarray, tube: float
+    ) -> tuple[list[InertiaModel], list[np.ndarray]]:
         """Every inertia model (nominal, the law's ``M_L``, each piece's ``M_L`` and ``M_U``) over
-        the boxes of ``q``: its value at each cell's centre and its derivatives in ``q`` over the
-        whole box (:func:`inertia_model`), with the slopes ``s_k`` for its rates."""
+        the cells of the reference (half-widths ``reference_radii``) and the tube ``||e|| <=
+        tube`` around them, ``q`` a box that holds both: its value at each cell's centre and its
+        derivatives in ``q`` over the whole box (:func:`inertia_model`), with the slopes ``s_k``
+        for its rates."""
         n, cells = self.dof, q.mid.shape[0]
         centers = self.regressor.mass_matrices(Ball.point(q.mid), self._parameters)
         diagonal = np.einsum("pi,ij->pij", self._armature, np.eye(n))
@@ -345,7 +355,7 @@ class CellFloor:
         )
         slopes = self.regressor.mass_matrices(along, self._parameters).dot  # (cells, k, P, n, n)
         pairs = [
-            inertia_model(centers[:, index], slopes[:, :, index], q.rad)
+            inertia_model(centers[:, index], slopes[:, :, index], reference_radii, tube)
             for index in range(len(self._parameters))
         ]
         return [model for model, _ in pairs], [slope for _, slope in pairs]
