@@ -107,3 +107,52 @@ def test_the_coriolis_bounds_hold_pinocchio_in_the_lower_metric(arm):
             )
             checked += 1
     assert checked >= 40
+
+
+@pytest.mark.parametrize("arm", ["ur5", "panda"])
+def test_the_inertia_models_hold_pinocchio_over_the_cells_and_the_tube(arm):
+    """``(1 - eps) M_c <= M(q) <= (1 + eps) M_c`` for the nominal model and the law's ``M_L`` at
+    random times of random cells and errors of the tube (a 2-norm ball, drawn near its sphere),
+    and the law's rate slopes bound ``||M_L^-1/2 (dM_L/dq . v) M_L^-1/2||`` (central differences
+    of Pinocchio) for random unit directions ``v``: the Taylor form (first derivatives at the
+    centre, second derivatives over boxes of cells) against Pinocchio itself. The Panda is where
+    the second-order term matters most (its lightest mode is 0.005 kg m^2)."""
+    locked = ("panda_finger_joint1", "panda_finger_joint2") if arm == "panda" else ()
+    robot = urpc.load_robot(arm, locked_joints=locked)
+    box = urpc.load_uncertainty(arm, robot)
+    T, tube = 1e-3, 1e-2
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=T)
+    trajectory = generic_trajectory(box.nominal_robot(robot))
+    floor_of = CellFloor(controller, trajectory, 1.0, cells=40)
+    q = floor_of._states(tube, 0.0, 2 * T)[0].val
+    reference_radii = floor_of._states(0.0, 0.0, 2 * T)[0].val.rad
+    models, rates = floor_of._inertia_models(q, reference_radii, tube)
+    plants = [
+        (controller.robot, models[0], None),
+        (controller.inertia_bounds.lower_robot, models[1], rates[1]),
+    ]
+    rng = np.random.default_rng(11)
+    h, checked = 1e-6, 0
+    for _ in range(60):
+        cell = int(rng.integers(floor_of.cells))
+        t = rng.uniform(floor_of.edges[cell], floor_of.edges[cell + 1] + 2 * T)
+        e = rng.standard_normal(robot.dof)
+        e *= tube * rng.uniform(0, 1) ** 0.1 / np.linalg.norm(e)
+        x = trajectory.reference(t).q - e
+        for plant, model, slopes in plants:
+            P, eps = model.inverse_factor[cell], model.eps[cell]
+            if not model.valid[cell]:
+                continue  # eps >= 1: a model the certificate does not use
+            checked += 1
+            lam = np.linalg.eigvalsh(P @ plant.M(x) @ P.T)
+            assert lam[0] >= 1 - eps - 1e-9 and lam[-1] <= 1 + eps + 1e-9, (t, lam, eps)
+            if slopes is None:
+                continue
+            v = rng.standard_normal(robot.dof)
+            v /= np.linalg.norm(v)
+            rate = (plant.M(x + h * v) - plant.M(x - h * v)) / (2 * h)
+            S = np.linalg.inv(scipy.linalg.sqrtm(plant.M(x)).real)
+            value = np.linalg.norm(S @ rate @ S, 2)
+            bound = np.abs(v) @ slopes[cell] / (1 - eps)
+            assert value <= bound * (1 + 1e-6), (t, value, bound)
+    assert checked >= 60

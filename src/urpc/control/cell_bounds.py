@@ -50,23 +50,32 @@ class InertiaModel:
 
 
 def inertia_model(
-    center: Ball, derivatives: Ball, radii: np.ndarray, ball: float = 0.0
+    center: Ball,
+    slopes: Ball,
+    radii: np.ndarray,
+    ball: float,
+    remainder: np.ndarray,
+    slope_spread: np.ndarray,
 ) -> tuple[InertiaModel, np.ndarray]:
     """The model of a symmetric matrix over the states ``q = q_c + x + e`` with ``|x_k| <= r_k``
     and ``||e||_2 <= ball`` (a cell of the reference and the tube around it), from its value at
-    the centre (``center``, a ball of rounding width) and its partial derivatives over the whole
-    region (``derivatives``: (cells, k, n, n), ``dM/dq_k`` enclosed over a box that holds it;
-    ``radii``: (cells, k), the cell's half-widths without the tube): by the mean value theorem
-    ``M(q) - M_c = sum_k (q_k - q_c,k) dM/dq_k(xi)``, so that with ``P = L^-1``
+    the centre (``center``, a ball of rounding width), its partial derivatives at the centre
+    (``slopes``: (cells, k, n, n), ``D_k = dM/dq_k(q_c)``, a ball of rounding width) and bounds of
+    its second derivatives over the region (:func:`taylor_terms`). By Taylor's theorem with the
+    Lagrange remainder, ``M(q) - M_c = sum_k dq_k D_k + Z(dq)`` with ``|Z| <= remainder``
+    entrywise, so that with ``P = L^-1``
 
-        ||P (M(q) - M_c) P^T|| <= || |P| R_c |P|^T || + sum_k r_k s_k + ball ||s||_2,
-        s_k = ||P D_k P^T||_2 + || |P| rad(D_k) |P|^T ||_2   (D_k the centre of dM/dq_k)
+        ||P (M(q) - M_c) P^T|| <= || |P| R_c |P|^T || + sum_k r_k s_k + ball ||s||_2
+                                  + || |P| remainder |P|^T ||,
+        s_k = ||P D_k P^T||_2 + || |P| rad(D_k) |P|^T ||_2
 
     (``sum_k |e_k| s_k <= ||e||_2 ||s||_2``: the tube is a ball, which its bounding box would
-    over-state by up to ``sqrt(n)``). This keeps the structure of each derivative (an entrywise
-    bound of ``M(q) - M_c`` alone loses it through ``|P|`` where the lightest mode couples the
-    joints). Returns the model and ``s_k`` per cell (cells, k), for rates ``dM/dt = sum_k qd_k
-    dM/dq_k``."""
+    over-state by up to ``sqrt(n)``). The first-order part keeps the structure of each
+    derivative (an entrywise bound loses it through ``|P|`` where the lightest mode couples the
+    joints); only the second-order part goes through ``|P|``. Over the region ``dM/dq_k`` differs
+    from ``D_k`` by at most ``slope_spread`` (cells, k, n, n) entrywise, so the slopes returned
+    for rates ``dM/dt = sum_k qd_k dM/dq_k`` are ``(s_k + || |P| spread_k |P|^T ||) /
+    lambda_min(P M_c P^T)`` per cell (cells, k)."""
     mid = center.mid
     eigenvalues = np.linalg.eigvalsh(mid)
     lam_min, lam_max = eigenvalues[..., 0], eigenvalues[..., -1]
@@ -79,18 +88,40 @@ def inertia_model(
     floor = np.linalg.eigvalsh(P @ safe @ Pt)[..., 0]
     absolute, absolute_t = np.abs(P), np.abs(Pt)
     Pk, Pkt = P[:, None], Pt[:, None]
-    slopes = spectral_norm(Pk @ derivatives.mid @ Pkt) + spectral_norm(
-        absolute[:, None] @ derivatives.rad @ absolute_t[:, None]
+    first = spectral_norm(Pk @ slopes.mid @ Pkt) + spectral_norm(
+        absolute[:, None] @ slopes.rad @ absolute_t[:, None]
     )
-    slopes = slopes * (1 + LAPACK_MARGIN)
+    first = first * (1 + LAPACK_MARGIN)
     spread = (
         spectral_norm(absolute @ center.rad @ absolute_t)
-        + np.sum(radii * slopes, axis=-1)
-        + ball * np.sqrt(np.sum(slopes * slopes, axis=-1))
+        + np.sum(radii * first, axis=-1)
+        + ball * np.sqrt(np.sum(first * first, axis=-1))
+        + spectral_norm(absolute @ remainder @ absolute_t)
     )
     eps = spread / floor * (1 + LAPACK_MARGIN) + LAPACK_MARGIN
     model = InertiaModel(mid, P, eps, lam_min, lam_max, positive & (eps < 1))
-    return model, slopes / floor[:, None]
+    rates = first + spectral_norm(absolute[:, None] @ slope_spread @ absolute_t[:, None])
+    return model, rates * (1 + LAPACK_MARGIN) / floor[:, None]
+
+
+def taylor_terms(
+    curvatures: Ball, group: np.ndarray, widths: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Entrywise bounds of the second-order terms of :func:`inertia_model` per cell: with
+    ``|H_kj| <= |mid| + rad`` the second derivatives over a box that holds the cell's region
+    (``curvatures``: (groups, k, j, models, n, n), cell ``c`` in box ``group[c]``) and ``|dq_k| <=
+    w_k`` (``widths``: (cells, k)), the Lagrange remainder ``1/2 sum_kj |dq_k| |dq_j| |H_kj|``
+    (cells, models, n, n) and the change of each first derivative over the region, ``sum_j w_j
+    |H_kj|`` (cells, k, models, n, n)."""
+    magnitude = (np.abs(curvatures.mid) + curvatures.rad) * (1 + 1e-12)
+    w = widths * (1 + 1e-12)
+    cells, (n, _, models, rows, columns) = len(group), magnitude.shape[1:]
+    spread = np.empty((cells, n, models, rows, columns))
+    for box in np.unique(group):
+        members = np.flatnonzero(group == box)
+        spread[members] = np.einsum("cj,kjmab->ckmab", w[members], magnitude[box])
+    remainder = 0.5 * np.einsum("ck,ckmab->cmab", w, spread)
+    return remainder * (1 + 1e-12), spread * (1 + 1e-12)
 
 
 def spectral_norm(X: np.ndarray) -> np.ndarray:

@@ -33,6 +33,7 @@ from .cell_bounds import (
     inertia_model,
     link_parameters,
     plant_hull,
+    taylor_terms,
     velocity_bound,
 )
 from .interval import IntervalPassivityController
@@ -42,6 +43,10 @@ from .sampled_joints import JointTerms
 CELL_MOTION = 0.01
 #: Bounds on the number of cells.
 MIN_CELLS, MAX_CELLS = 16, 4000
+#: The inertia models' second derivatives are enclosed over boxes of this many consecutive cells.
+CURVATURE_CELLS = 8
+#: ... at most this many bytes of their recursion at a time.
+CURVATURE_CHUNK_BYTES = 2**28
 
 
 class CellFloor:
@@ -350,14 +355,35 @@ class CellFloor:
         diagonal = np.einsum("pi,ij->pij", self._armature, np.eye(n))
         centers = Ball(centers.mid + diagonal, centers.rad)  # (cells, P, n, n)
         along = Jet(
-            q.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n))),
+            Ball.point(np.broadcast_to(q.mid[:, None, :], (cells, n, n))),
             Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
         )
         slopes = self.regressor.mass_matrices(along, self._parameters).dot  # (cells, k, P, n, n)
-        pairs = [
-            inertia_model(centers[:, index], slopes[:, :, index], reference_radii, tube)
-            for index in range(len(self._parameters))
+        # Second derivatives over boxes of CURVATURE_CELLS consecutive cells (each the hull of
+        # its cells' boxes, tube included): a second-order term, so a coarser box costs little.
+        size = max(1, min(CURVATURE_CELLS, cells))
+        group = np.arange(cells) // size
+        starts = np.arange(0, cells, size)
+        lower = np.minimum.reduceat(q.mid - q.rad, starts, axis=0)
+        upper = np.maximum.reduceat(q.mid + q.rad, starts, axis=0)
+        boxes = Ball.hull(lower, upper)
+        per_box = n * (n + 1) // 2 * n * len(self._parameters) * 3 * 8 * 8
+        chunk = max(1, int(CURVATURE_CHUNK_BYTES // max(per_box, 1)))
+        parts = [
+            self.regressor.mass_matrix_curvatures(boxes[start : start + chunk], self._parameters)
+            for start in range(0, len(starts), chunk)
         ]
+        curvatures = Ball(
+            np.concatenate([p.mid for p in parts]), np.concatenate([p.rad for p in parts])
+        )
+        remainder, spread = taylor_terms(curvatures, group, reference_radii + tube)
+        pairs = [
+            inertia_model(
+                centers[:, index], slopes[:, :, index], reference_radii, tube,
+                remainder[:, index], spread[:, :, index],
+            )
+            for index in range(len(self._parameters))
+        ]  # fmt: skip
         return [model for model, _ in pairs], [slope for _, slope in pairs]
 
     def _mismatch_parts(self, tube: float, extension: float):
