@@ -1,7 +1,8 @@
 """The sampled-data floor of the implicit law, bounded over whole cells of time (docs/sampled-data.md §2).
 
-The reference ``[0, duration]`` is cut into cells; each cell is widened by the period that follows
-its last sample. Over a cell, the reference lies in a box (:meth:`Trajectory.enclose`, Taylor with
+The reference ``[0, duration]`` (one period of a periodic reference, whose states repeat:
+:func:`urpc.trajectories.covered_span`) is cut into cells; each cell is widened by the period
+that follows its last sample. Over a cell, the reference lies in a box (:meth:`Trajectory.enclose`, Taylor with
 a sound jerk bound), the tube ``||e|| <= rho`` (and ``||r|| <= r_max``) adds a box of errors, and
 every quantity of the one-period bound is enclosed over that box of states *and* over the
 parameter box by ball arithmetic (:mod:`urpc.model.regressor_balls`): inertia matrices and their
@@ -22,7 +23,7 @@ import numpy as np
 
 from ..model.inertia_bounds import InertiaBounds
 from ..model.regressor_balls import Ball, BallRegressor, Jet, matvec, parameters_of
-from ..trajectories import Trajectory
+from ..trajectories import Trajectory, covered_span
 from .box_pieces import split_box
 from .cell_bounds import (
     LAPACK_MARGIN,
@@ -56,7 +57,8 @@ class CellFloor:
         controller: An implicit sampled-data controller (or any interval controller, for the
             inertia figures of Theorem 1).
         trajectory: The reference; it must give :meth:`Trajectory.jerk_bound`.
-        duration: The time span covered [s].
+        duration: The time span covered [s] (one period of a periodic reference when shorter:
+            :attr:`span`).
         cells: Number of cells (default: the reference moves at most :data:`CELL_MOTION` per
             joint within a cell, between :data:`MIN_CELLS` and :data:`MAX_CELLS`).
     """
@@ -79,12 +81,14 @@ class CellFloor:
         self.law_bounds = controller.inertia_bounds or InertiaBounds(robot, box)
         self.joints = JointTerms(controller.bound.joints)
         self.regressor = BallRegressor(robot)
+        # A periodic reference repeats its states: one period covers the whole duration.
+        self.span = covered_span(trajectory, self.duration)
         if cells is None:
-            probe = np.linspace(0.0, self.duration, 257)
+            probe = np.linspace(0.0, self.span, 257)
             speed = float(np.max(np.abs(np.atleast_2d(trajectory.evaluate(probe)[1]))))
-            cells = int(math.ceil(self.duration * speed / CELL_MOTION))
+            cells = int(math.ceil(self.span * speed / CELL_MOTION))
         self.cells = int(np.clip(cells, MIN_CELLS, MAX_CELLS))
-        self.edges = np.linspace(0.0, self.duration, self.cells + 1)
+        self.edges = np.linspace(0.0, self.span, self.cells + 1)
         # Models: nominal, the law's lower bound, then (lower, upper) per piece.
         self.pieces = split_box(box)
         piece_bounds = [InertiaBounds(robot, piece) for piece in self.pieces]

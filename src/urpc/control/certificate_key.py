@@ -38,11 +38,11 @@ from typing import Any
 
 import numpy as np
 
-from ..trajectories import Trajectory
+from ..trajectories import READ_METHODS, Trajectory, defining_class
 
 #: The methods of a reference the certificate reads: its fingerprint must be defined at or below
 #: the class that defines each of them.
-_READ = ("evaluate", "reference", "jerk_bound", "enclose")
+_READ = READ_METHODS + ("period",)
 
 
 class NoKey(Exception):
@@ -153,9 +153,9 @@ def trajectory_fingerprint(trajectory: Trajectory) -> dict[str, Any]:
             certificate reads (:data:`_READ`) that it overrides.
     """
     kind = type(trajectory)
-    owner = _owner(kind, "fingerprint")
+    owner = defining_class(kind, "fingerprint")
     for name in _READ:
-        if not issubclass(owner, _owner(kind, name)):
+        if not issubclass(owner, defining_class(kind, name)):
             raise NoKey(
                 f"{kind.__name__} overrides {name}() but not fingerprint(): its certificate is "
                 "not cached"
@@ -252,14 +252,6 @@ def library_versions() -> dict[str, str]:
     import scipy
 
     return {"pinocchio": pinocchio.__version__, "numpy": np.__version__, "scipy": scipy.__version__}
-
-
-def _owner(kind: type, name: str) -> type:
-    """The class of ``kind``'s method resolution order that defines ``name``."""
-    for base in kind.__mro__:
-        if name in vars(base):
-            return base
-    return object
 
 
 def _class_name(value: Any) -> str:
