@@ -27,7 +27,7 @@ from . import (
     simulate,
     virtual_robot,
 )
-from .common import EXIT_INPUT, EXIT_OK, Parser, one_line
+from .common import EXIT_INPUT, EXIT_OK, Parser, add_subcommands, one_line
 
 COMMAND_MODULES = [
     inspect, init, identify, simulate, certify, demo, campaign, bench, run, virtual_robot,
@@ -46,7 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Exit codes: 0 success, 2 bad input. Docs: docs/ in the source tree.",
     )
     parser.add_argument("--version", action="version", version=f"urpc {__version__}")
-    commands = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
+    commands = add_subcommands(parser, "command", "COMMAND")
     for module in COMMAND_MODULES:
         module.register(commands)
     return parser
