@@ -6,6 +6,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from ..names import SAFE_MODES, SAMPLED_LAWS
 from .common import (
     EXIT_OK,
     add_command,
@@ -71,7 +72,7 @@ def register(commands) -> None:
     )
     p.add_argument(
         "--sampled-law",
-        choices=("implicit", "paper"),
+        choices=SAMPLED_LAWS,
         help="law of the interval controller (default: the scenario's)",
     )
     p.add_argument(
@@ -83,7 +84,7 @@ def register(commands) -> None:
     )
     p.add_argument(
         "--safe-mode",
-        choices=("zero", "damping"),
+        choices=SAFE_MODES,
         default="damping",
         help="safe command on a fault (damping)",
     )

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from ..names import PLANT_BACKENDS, VELOCITY_MODES
 from .common import (
     EXIT_OK,
     add_command,
@@ -95,7 +96,7 @@ def register(commands) -> None:
     )
     p.add_argument(
         "--velocity",
-        choices=("measured", "difference"),
+        choices=VELOCITY_MODES,
         default="measured",
         help="velocity sent: the plant's (measured), or the backward difference of the sent positions",
     )
@@ -154,7 +155,7 @@ def register(commands) -> None:
     )
     p.add_argument(
         "--plant",
-        choices=("pinocchio", "mujoco"),
+        choices=PLANT_BACKENDS,
         default="pinocchio",
         help="plant backend (pinocchio)",
     )
