@@ -3,7 +3,8 @@
 Contract for every command: exit code 0 on success, 2 for bad user input with a single line on
 stderr starting with ``error:`` (no traceback); ``--json`` prints one JSON object on stdout.
 Each command group lives in its own module with a ``register(commands)`` function that adds its
-subparsers and sets ``handler``; :data:`COMMAND_MODULES` lists them in ``--help`` order.
+commands, each with :func:`~urpc.cli.common.add_command` (its name, ``handler`` and help texts);
+:data:`COMMAND_MODULES` lists the modules in ``--help`` order.
 """
 
 from __future__ import annotations
