@@ -66,12 +66,7 @@ def certificate_key(
         NoKey: the reference gives no fingerprint.
     """
     document = key_document(
-        controller,
-        trajectory,
-        duration=duration,
-        disturbance_bound=disturbance_bound,
-        cells=cells,
-        actuation_delay=actuation_delay,
+        controller, trajectory, duration, disturbance_bound, cells, actuation_delay
     )
     text = json.dumps(document, sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(text.encode()).hexdigest()
@@ -80,13 +75,13 @@ def certificate_key(
 def key_document(
     controller,
     trajectory: Trajectory,
-    *,
     duration: float,
-    disturbance_bound: float | None = None,
-    cells: int | None = None,
-    actuation_delay: int | None = None,
+    disturbance_bound: float | None,
+    cells: int | None,
+    actuation_delay: int | None,
 ) -> dict[str, Any]:
-    """The canonical document :func:`certificate_key` hashes (JSON data, module docstring).
+    """The canonical document :func:`certificate_key` hashes (JSON data, module docstring), of
+    the arguments of :func:`certificate_key` (all given: the defaults are its own).
 
     Raises:
         NoKey: the reference gives no fingerprint.
