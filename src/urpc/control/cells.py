@@ -44,8 +44,9 @@ from .sampled_joints import JointTerms
 CELL_MOTION = 0.01
 #: Bounds on the number of cells.
 MIN_CELLS, MAX_CELLS = 16, 4000
-#: The inertia models' second derivatives are enclosed over boxes of this many consecutive cells.
-CURVATURE_CELLS = 8
+#: The inertia models' second derivatives are enclosed over boxes of at least this many
+#: consecutive cells (more on long chains, :meth:`CellFloor._inertia_models`).
+CURVATURE_CELLS = 4
 #: ... at most this many bytes of their recursion at a time.
 CURVATURE_CHUNK_BYTES = 2**28
 
@@ -363,9 +364,11 @@ class CellFloor:
             Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
         )
         slopes = self.regressor.mass_matrices(along, self._parameters).dot  # (cells, k, P, n, n)
-        # Second derivatives over boxes of CURVATURE_CELLS consecutive cells (each the hull of
-        # its cells' boxes, tube included): a second-order term, so a coarser box costs little.
-        size = max(1, min(CURVATURE_CELLS, cells))
+        # Second derivatives over boxes of consecutive cells (each the hull of its cells' boxes,
+        # tube included): a second-order term, so a coarser box costs little. At least
+        # CURVATURE_CELLS, and (n + 1) / 2 on longer chains: their n (n + 1) / 2 pairs then cost
+        # what the n first derivatives do, so the cost keeps growing as n^3.
+        size = max(1, min(max(CURVATURE_CELLS, math.ceil((n + 1) / 2)), cells))
         group = np.arange(cells) // size
         starts = np.arange(0, cells, size)
         lower = np.minimum.reduceat(q.mid - q.rad, starts, axis=0)
