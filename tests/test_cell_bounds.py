@@ -1,13 +1,18 @@
-"""The cell enclosures do not depend on how the cells are batched: the Coriolis forms, computed
-chunk by chunk to bound memory, give every cell the enclosure it gets in one batch."""
+"""The cell enclosures do not depend on how the cells are batched (the Coriolis forms, computed
+chunk by chunk to bound memory, give every cell the enclosure it gets in one batch), and they
+hold the Christoffel matrices of Pinocchio's ``M`` at random points of the cells, the tube and the
+box."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
+import scipy.linalg
 
 import urpc
 import urpc.control.cell_bounds as cell_bounds
 from urpc.control.cells import CellFloor
+from urpc.model.inertia_bounds import InertiaBounds
 from urpc.trajectories import generic_trajectory
 
 
@@ -27,3 +32,127 @@ def test_chunked_coriolis_forms_equal_one_batch(monkeypatch):
         for name in ("coriolis", "metric_rate"):
             np.testing.assert_allclose(b[name], a[name], rtol=1e-12)
             assert np.all(np.isfinite(a[name])) and np.all(a[name] > 0)
+
+
+# ============================================================================ against Pinocchio
+def _christoffel(robot, q, v, h=1e-6):
+    """``C(q, v)`` from the Christoffel symbols of Pinocchio's ``M`` (central differences)."""
+    n = robot.dof
+    dM = np.empty((n, n, n))  # dM[k] = dM/dq_k
+    for k in range(n):
+        step = np.zeros(n)
+        step[k] = h
+        dM[k] = (robot.M(q + step) - robot.M(q - step)) / (2 * h)
+    # C_ij = sum_k (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) v_k / 2
+    return 0.5 * (
+        np.einsum("kij,k->ij", dM, v)
+        + np.einsum("jik,k->ij", dM, v)
+        - np.einsum("ijk,k->ij", dM, v)
+    )
+
+
+def _inside(piece, point) -> bool:
+    return all(
+        np.all(point[b.link] >= b.lower - 1e-12) and np.all(point[b.link] <= b.upper + 1e-12)
+        for b in piece.links
+        if b.link in point
+    )
+
+
+@pytest.mark.parametrize("arm", ["rr_planar", "ur5"])
+def test_the_coriolis_bounds_hold_pinocchio_in_the_lower_metric(arm):
+    """Per piece, ``coriolis`` bounds ``||S C(q, qd; pi) S|| + ||S (C(q, qd_a; pi) - C(q, qd_a;
+    pi0)) S||`` with ``S = M_L(q)^-1/2`` (the piece's lower bound), at random times, errors,
+    plant velocities and plants of the box (vertices and interior points): the plant's Coriolis
+    matrix and its mismatch along ``qd_a``, from Pinocchio's ``M`` by its Christoffel symbols. The
+    UR5's box has more parameter directions than the triangle inequality is tried for."""
+    robot = urpc.load_robot(arm)
+    box = urpc.load_uncertainty(arm, robot)
+    T, tube, r_max = 1e-3, 5e-3, 0.2
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=T)
+    trajectory = generic_trajectory(box.nominal_robot(robot))
+    floor_of = CellFloor(controller, trajectory, 1.0, cells=16)
+    quantities = floor_of.quantities(tube, r_max, 2 * T)
+    lowers = [InertiaBounds(robot, piece).lower_robot for piece in floor_of.pieces]
+    nominal, Kr = controller.robot, controller.Kr
+    rng = np.random.default_rng(3)
+    checked = 0
+    for _ in range(40):
+        cell = int(rng.integers(floor_of.cells))
+        t = rng.uniform(floor_of.edges[cell], floor_of.edges[cell + 1] + 2 * T)
+        e = rng.standard_normal(robot.dof)
+        e *= tube * rng.uniform(0, 1) ** 0.2 / np.linalg.norm(e)
+        r = rng.standard_normal(robot.dof)
+        r *= r_max * rng.uniform(0, 1) ** 0.2 / np.linalg.norm(r)
+        reference = trajectory.reference(t)
+        q, qd_a = reference.q - e, reference.qd + Kr * e
+        qd = reference.qd - (r - Kr * e)  # the plant's velocity, ed = r - Kr e
+        point = (
+            box.vertex(int(rng.integers(2**box.n_uncertain)))
+            if rng.uniform() < 0.5
+            else box.sample(rng)
+        )
+        plant = box.plant(point)
+        for piece, lower, values in zip(floor_of.pieces, lowers, quantities["pieces"], strict=True):
+            if not _inside(piece, point):
+                continue
+            S = np.linalg.inv(scipy.linalg.sqrtm(lower.M(q)).real)
+            plant_part = np.linalg.norm(S @ _christoffel(plant, q, qd) @ S, 2)
+            mismatch = _christoffel(plant, q, qd_a) - _christoffel(nominal, q, qd_a)
+            value = plant_part + np.linalg.norm(S @ mismatch @ S, 2)
+            assert value <= values["coriolis"][cell] * (1 + 1e-6), (
+                t,
+                value,
+                values["coriolis"][cell],
+            )
+            checked += 1
+    assert checked >= 40
+
+
+@pytest.mark.parametrize("arm", ["ur5", "panda"])
+def test_the_inertia_models_hold_pinocchio_over_the_cells_and_the_tube(arm):
+    """``(1 - eps) M_c <= M(q) <= (1 + eps) M_c`` for the nominal model and the law's ``M_L`` at
+    random times of random cells and errors of the tube (a 2-norm ball, drawn near its sphere),
+    and the law's rate slopes bound ``||M_L^-1/2 (dM_L/dq . v) M_L^-1/2||`` (central differences
+    of Pinocchio) for random unit directions ``v``: the Taylor form (first derivatives at the
+    centre, second derivatives over boxes of cells) against Pinocchio itself. The Panda is where
+    the second-order term matters most (its lightest mode is 0.005 kg m^2)."""
+    locked = ("panda_finger_joint1", "panda_finger_joint2") if arm == "panda" else ()
+    robot = urpc.load_robot(arm, locked_joints=locked)
+    box = urpc.load_uncertainty(arm, robot)
+    T, tube = 1e-3, 1e-2
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=T)
+    trajectory = generic_trajectory(box.nominal_robot(robot))
+    floor_of = CellFloor(controller, trajectory, 1.0, cells=40)
+    q = floor_of._states(tube, 0.0, 2 * T)[0].val
+    reference_radii = floor_of._states(0.0, 0.0, 2 * T)[0].val.rad
+    models, rates = floor_of._inertia_models(q, reference_radii, tube)
+    plants = [
+        (controller.robot, models[0], None),
+        (controller.inertia_bounds.lower_robot, models[1], rates[1]),
+    ]
+    rng = np.random.default_rng(11)
+    h, checked = 1e-6, 0
+    for _ in range(60):
+        cell = int(rng.integers(floor_of.cells))
+        t = rng.uniform(floor_of.edges[cell], floor_of.edges[cell + 1] + 2 * T)
+        e = rng.standard_normal(robot.dof)
+        e *= tube * rng.uniform(0, 1) ** 0.1 / np.linalg.norm(e)
+        x = trajectory.reference(t).q - e
+        for plant, model, slopes in plants:
+            P, eps = model.inverse_factor[cell], model.eps[cell]
+            if not model.valid[cell]:
+                continue  # eps >= 1: a model the certificate does not use
+            checked += 1
+            lam = np.linalg.eigvalsh(P @ plant.M(x) @ P.T)
+            assert lam[0] >= 1 - eps - 1e-9 and lam[-1] <= 1 + eps + 1e-9, (t, lam, eps)
+            if slopes is None:
+                continue
+            v = rng.standard_normal(robot.dof)
+            v /= np.linalg.norm(v)
+            rate = (plant.M(x + h * v) - plant.M(x - h * v)) / (2 * h)
+            S = np.linalg.inv(scipy.linalg.sqrtm(plant.M(x)).real)
+            value = np.linalg.norm(S @ rate @ S, 2)
+            bound = np.abs(v) @ slopes[cell] / (1 - eps)
+            assert value <= bound * (1 + 1e-6), (t, value, bound)
+    assert checked >= 60

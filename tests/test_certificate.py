@@ -161,6 +161,17 @@ def test_the_aliasing_configuration_is_not_certified(rr, rr_box):
     assert not certificate.epsilon_floor <= 3.56e-3  # the worst vertex settled at 3.56e-3
 
 
+def test_a_periodic_reference_is_certified_over_one_period(rr, rr_box):
+    """The paper's reference repeats after 4 s: 119 s cost the cells of one period and give
+    the floor of one period, the same as a 4 s certificate's (the states bounded are the same)."""
+    controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=1e-3)
+    one = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=2.0)
+    many = certify(controller, PaperTrajectory(), duration=119.0, disturbance_bound=2.0)
+    assert many.figures["cells"] == one.figures["cells"]
+    assert many.epsilon_floor == pytest.approx(one.epsilon_floor, rel=1e-9)
+    assert many.certified == one.certified
+
+
 @pytest.mark.parametrize("period", [1e-3, 5e-4, 1e-4])
 def test_a_certified_floor_bounds_every_vertex_under_the_worst_disturbance(rr, rr_box, period):
     """All 8 vertices of Table I, the disturbance at its bound against r in the M^-1 metric,

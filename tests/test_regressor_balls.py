@@ -110,6 +110,42 @@ def test_christoffel_matrices_hold_pinocchio(robot):
                     assert np.all(np.abs(C - each.mid[b, k, p]) <= each.rad[b, k, p] + slack)
 
 
+def test_mass_matrix_curvatures_hold_second_differences(robot):
+    """``d^2 M / dq_k dq_j`` over boxes (jets of jets) holds Pinocchio's central second
+    differences at points of the box, corners included, for two parameter vectors at once."""
+    rng = np.random.default_rng(7)
+    regressor = BallRegressor(robot)
+    pi = parameters_of(robot)
+    scaled = pi * rng.uniform(0.8, 1.2, pi.shape)
+    n, batch, h = robot.dof, 2, 1e-4
+    q = Ball(rng.standard_normal((batch, n)), np.full((batch, n), 0.03))
+    H = regressor.mass_matrix_curvatures(q, np.stack([pi, scaled]))
+    assert H.mid.shape == (batch, n, n, 2, n, n)
+    model = robot.model.copy()
+    for j in range(n):
+        model.inertias[j + 1] = pin.Inertia.FromDynamicParameters(scaled[10 * j : 10 * j + 10])
+    data = model.createData()
+
+    def mass(which, x):
+        if which == 0:
+            return robot.M(x)
+        M = pin.crba(model, data, robot.configuration(x))
+        return np.triu(M) + np.triu(M, 1).T
+
+    eye = np.eye(n) * h
+    for b in range(batch):
+        for qq in _draws(rng, q.mid[b], q.rad[b], 2):
+            for which in (0, 1):
+                for k, j in itertools.product(range(n), repeat=2):
+                    second = (
+                        mass(which, qq + eye[k] + eye[j]) - mass(which, qq + eye[k] - eye[j])
+                        - mass(which, qq - eye[k] + eye[j]) + mass(which, qq - eye[k] - eye[j])
+                    ) / (4 * h * h)  # fmt: skip
+                    slack = 1e-5 * (1 + np.abs(second))  # the difference's own error
+                    error = np.abs(second - H.mid[b, k, j, which])
+                    assert np.all(error <= H.rad[b, k, j, which] + slack), (k, j)
+
+
 def test_jets_hold_finite_differences(robot):
     """d/dt of Y_SL and M along q(t) = q0 + t qd0 etc. (every input moving at its rate)."""
     rng = np.random.default_rng(3)

@@ -10,6 +10,7 @@ from urpc.trajectories import (
     PaperTrajectory,
     QuinticTrajectory,
     SinusoidTrajectory,
+    covered_span,
     generic_trajectory,
     home_configuration,
 )
@@ -130,3 +131,55 @@ def test_invalid_trajectories(rr):
         QuinticTrajectory([[0.0], [1.0]], [1.0, 1.0])
     with pytest.raises(InputError, match="shape"):
         SinusoidTrajectory([0.0, 0.0], [1.0, 2.0, 3.0], 1.0)
+
+
+# ============================================================================ periods
+@pytest.mark.parametrize(
+    "trajectory, period",
+    [
+        (PaperTrajectory(), 4.0),
+        (SinusoidTrajectory(home=(0.0, 1.0), amplitude=0.3, frequency=(0.25, 0.375)), 8.0),
+        (SinusoidTrajectory(home=(0.0, 1.0), amplitude=(0.3, 0.0), frequency=(0.5, 0.1)), 2.0),
+        (SinusoidTrajectory(home=(0.0,), amplitude=0.2, frequency=1.0, phase=0.7), 1.0),
+    ],
+)
+def test_a_declared_period_repeats_the_reference(trajectory, period):
+    """``q_d``, ``qd_d``, ``qdd_d`` at ``t + P`` equal those at ``t`` (random ``t``), and no
+    shorter candidate ``P / k`` repeats them."""
+    assert trajectory.period() == period
+    rng = np.random.default_rng(0)
+    t = rng.uniform(0, 20, 50)
+    for now, later in zip(trajectory.evaluate(t), trajectory.evaluate(t + period), strict=True):
+        np.testing.assert_allclose(later, now, atol=1e-9)
+    for k in (2, 3):
+        shifted = trajectory.evaluate(t + period / k)[0]
+        assert np.max(np.abs(shifted - trajectory.evaluate(t)[0])) > 1e-3
+
+
+def test_frequencies_with_no_short_common_period_have_none():
+    """0.1 and 0.3 Hz are not binary fractions: their exact common period is astronomically long;
+    the generic sinusoid's spread frequencies likewise; a joint at rest everywhere has none."""
+    assert SinusoidTrajectory((0.0, 0.0), 0.2, (0.1, 0.3)).period() is None
+    spread = 0.25 * np.linspace(1.0, 1.5, 6)  # the generic sinusoid's, for six joints
+    assert SinusoidTrajectory(np.zeros(6), 0.2, spread).period() is None
+    assert SinusoidTrajectory((0.0,), 0.0, 1.0).period() is None
+    assert QuinticTrajectory([[0.0], [1.0]], [0.0, 1.0]).period() is None
+
+
+def test_the_covered_span_is_one_period_unless_a_subclass_recomputes_the_reference():
+    trajectory = PaperTrajectory()
+    assert covered_span(trajectory, 119.0) == pytest.approx(4.0, rel=1e-11)
+    assert covered_span(trajectory, 4.0) == 4.0  # not shorter than the duration
+    assert covered_span(trajectory, 3.0) == 3.0
+
+    class Faster(PaperTrajectory):
+        def evaluate(self, t):  # a different reference that inherits the paper's period
+            return super().evaluate(1.3 * np.asarray(t))
+
+    assert covered_span(Faster(), 119.0) == 119.0
+
+    class Declared(Faster):
+        def period(self):
+            return 4.0 / 1.3
+
+    assert covered_span(Declared(), 119.0) == pytest.approx(4.0 / 1.3, rel=1e-11)

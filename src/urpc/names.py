@@ -24,3 +24,9 @@ SAMPLED_LAWS = ("implicit", "paper")
 KR_CANDIDATES = (10.0, 15.0, 20.0, 30.0, 45.0, 60.0)
 #: Reference trajectories of a scenario file (:mod:`urpc.trajectories`).
 TRAJECTORY_KINDS = ("paper", "sinusoid", "quintic", "file", "waypoints")
+#: Safe commands of the robot safety layer on a fault (:class:`urpc.robot.safety.SafetyLayer`,
+#: ``urpc run --safe-mode``).
+SAFE_MODES = ("zero", "damping")
+#: Velocities a virtual robot sends (:class:`urpc.robot.virtual.ArmOptions`, ``urpc
+#: virtual-robot --velocity``): the plant's, or the backward difference of the sent positions.
+VELOCITY_MODES = ("measured", "difference")

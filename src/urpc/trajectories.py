@@ -20,6 +20,7 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -83,6 +84,15 @@ class Trajectory(ABC):
         ``None`` (the base class): not known, and the certificate is then computed every time.
         A subclass that overrides :meth:`evaluate` or :meth:`jerk_bound` must define its own (the
         cache ignores one inherited from above those methods)."""
+        return None
+
+    def period(self) -> float | None:
+        """A period ``P`` [s] of the reference, ``q_d(t + P) = q_d(t)`` for every ``t >= 0``
+        (exactly, in the mathematics of :meth:`evaluate`), or ``None``: none, or not known (the
+        base class). The certificate covers one period of a periodic reference instead of the
+        whole duration, since the states it bounds repeat (:func:`covered_span`). A subclass that
+        overrides :meth:`evaluate`, :meth:`reference`, :meth:`jerk_bound` or :meth:`enclose` must
+        define its own: one inherited from above those methods is ignored."""
         return None
 
     def enclose(self, start, stop) -> tuple[np.ndarray, ...]:
@@ -175,6 +185,10 @@ class PaperTrajectory(Trajectory):
     def __repr__(self) -> str:
         return f"PaperTrajectory(amplitude={self.amplitude.tolist()})"
 
+    def period(self) -> float:
+        """4 s: ``sin(pi t / 2)`` and ``sin(pi t)`` both repeat after it."""
+        return 4.0
+
 
 class SinusoidTrajectory(Trajectory):
     """``q_d(t) = home + amplitude sin(2 pi frequency t + phase)``, per joint.
@@ -223,6 +237,25 @@ class SinusoidTrajectory(Trajectory):
     def jerk_bound(self, start, stop):
         peak = np.abs(self.amplitude) * self._omega**3
         return np.broadcast_to(peak, np.shape(start) + (self.dof,))
+
+    def period(self) -> float | None:
+        """The least common period [s] of the moving joints (non-zero amplitude and frequency),
+        exactly: the frequencies are binary fractions, so each period ``1 / f`` is a rational
+        number and their least common multiple is computed in rationals. ``None`` when no joint
+        moves or when that period exceeds 10^6 s (frequencies with no short common period, as
+        0.1 and 0.3 written in binary)."""
+        moving = (self.amplitude != 0) & (self.frequency > 0)
+        if not np.any(moving):
+            return None
+        common = None
+        for f in self.frequency[moving]:
+            period = Fraction(1) / Fraction(float(f))
+            if common is None:
+                common = period
+            else:
+                numerator = math.lcm(common.numerator, period.numerator)
+                common = Fraction(numerator, math.gcd(common.denominator, period.denominator))
+        return float(common) if common <= 10**6 else None
 
     @property
     def peak_velocity(self) -> np.ndarray:
@@ -325,3 +358,29 @@ class QuinticTrajectory(Trajectory):
 #: Kinds a scenario names (:data:`urpc.names.TRAJECTORY_KINDS`); ``file`` and ``waypoints`` are
 #: built by :mod:`urpc.trajectory_sources`.
 TRAJECTORY_KINDS = names.TRAJECTORY_KINDS
+
+
+def defining_class(kind: type, name: str) -> type:
+    """The class of ``kind``'s method resolution order that defines ``name``."""
+    for base in kind.__mro__:
+        if name in vars(base):
+            return base
+    return object
+
+
+#: The methods of a reference that the certificate reads.
+READ_METHODS = ("evaluate", "reference", "jerk_bound", "enclose")
+
+
+def covered_span(trajectory: Trajectory, duration: float) -> float:
+    """The time span [s] from ``0`` whose states of the reference are those of ``[0,
+    duration]``: one :meth:`Trajectory.period` when it is shorter (widened by a relative
+    ``1e-12`` for the rounding of the period to a float), else the duration. A period inherited
+    from above a method that computes the reference is ignored."""
+    owner = defining_class(type(trajectory), "period")
+    if not all(issubclass(owner, defining_class(type(trajectory), m)) for m in READ_METHODS):
+        return float(duration)
+    period = trajectory.period()
+    if period is None or not (0 < period < duration):
+        return float(duration)
+    return min(float(duration), float(period) * (1 + 1e-12))

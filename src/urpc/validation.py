@@ -14,6 +14,17 @@ import numpy as np
 from .errors import InputError
 
 
+def check_type(field: str, value: Any, kind: type | tuple[type, ...], expected: str) -> None:
+    """``value`` must be a ``kind``; ``expected`` says what is (e.g. ``"a Robot
+    (urpc.load_robot(...))"``).
+
+    Raises:
+        InputError: ``expected ..., got <its type>`` (``field`` named).
+    """
+    if not isinstance(value, kind):
+        raise InputError(f"expected {expected}, got {type(value).__name__}", field=field)
+
+
 def finite_vector(field: str, value: Any, n: int) -> np.ndarray:
     """``value`` as a float vector of ``n`` finite entries.
 

@@ -3,7 +3,8 @@
 Contract for every command: exit code 0 on success, 2 for bad user input with a single line on
 stderr starting with ``error:`` (no traceback); ``--json`` prints one JSON object on stdout.
 Each command group lives in its own module with a ``register(commands)`` function that adds its
-subparsers and sets ``handler``; :data:`COMMAND_MODULES` lists them in ``--help`` order.
+commands, each with :func:`~urpc.cli.common.add_command` (its name, ``handler`` and help texts);
+:data:`COMMAND_MODULES` lists the modules in ``--help`` order.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from . import (
     simulate,
     virtual_robot,
 )
-from .common import EXIT_INPUT, EXIT_OK, Parser, one_line
+from .common import EXIT_INPUT, EXIT_OK, Parser, add_subcommands, one_line
 
 COMMAND_MODULES = [
     inspect, init, identify, simulate, certify, demo, campaign, bench, run, virtual_robot,
@@ -46,7 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Exit codes: 0 success, 2 bad input. Docs: docs/ in the source tree.",
     )
     parser.add_argument("--version", action="version", version=f"urpc {__version__}")
-    commands = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
+    commands = add_subcommands(parser, "command", "COMMAND")
     for module in COMMAND_MODULES:
         module.register(commands)
     return parser

@@ -9,9 +9,10 @@ import sys
 from ..errors import InputError
 from .common import (
     EXIT_OK,
-    Parser,
+    add_command,
     add_json_argument,
     add_progress_argument,
+    add_subcommands,
     names,
     positive_int,
     print_json,
@@ -24,8 +25,10 @@ DEFAULT_LOOP_STEPS = 3000
 
 
 def register(commands) -> None:
-    p = commands.add_parser(
+    p = add_command(
+        commands,
         "bench",
+        run_bench,
         help="measure the performance suite: rho, control step, loop latency, simulation, "
         "synthesis, campaign",
         description="Measure the figures of docs/performance.md on this machine: one rho "
@@ -49,11 +52,12 @@ def register(commands) -> None:
     )
     add_json_argument(p)
     add_progress_argument(p, "no progress lines on stderr")
-    p.set_defaults(handler=run_bench)
-    parts = p.add_subparsers(dest="bench_part", metavar="[bounds|loop]", parser_class=Parser)
+    parts = add_subcommands(p, "bench_part", "[bounds|loop]")
 
-    b = parts.add_parser(
+    b = add_command(
+        parts,
         "bounds",
+        run_bench_bounds,
         help="time one rho evaluation per bound method and robot, with its ratio to pin.rnea",
         description="Time one evaluation of rho (the Slotine-Li regressor included) per bound "
         "method on the benchmark box of each robot (the RR arm's Table I box; +-10 % mass, "
@@ -72,10 +76,11 @@ def register(commands) -> None:
     b.add_argument(
         "--repeats", type=positive_int, metavar="N", help="timed batches per figure (default 51)"
     )
-    b.set_defaults(handler=run_bench_bounds)
 
-    lp = parts.add_parser(
+    lp = add_command(
+        parts,
         "loop",
+        run_bench_loop,
         help="the robot control loop's step latency (p50 / p99 / p99.9 / max) next to one RNEA",
         description="Time consecutive ControlLoop.step calls (reference, controller output and "
         "advance, one log row) on each robot's 1 kHz scenario, in wall-clock time as the loop "
@@ -91,7 +96,6 @@ def register(commands) -> None:
         help=f"steps timed per robot (default {DEFAULT_LOOP_STEPS})",
     )
     _add_robots(lp)
-    lp.set_defaults(handler=run_bench_loop)
 
 
 def run_bench(args) -> int:

@@ -12,6 +12,7 @@ from .common import (
     RESULTS_ROOT,
     ROBOT_HELP,
     add_certificate_arguments,
+    add_command,
     add_output_arguments,
     add_scenario_argument,
     add_uncertainty_option,
@@ -34,8 +35,10 @@ EXIT_INTERRUPTED = 130
 def register(commands) -> None:
     from .simulate import add_plant_argument
 
-    p = commands.add_parser(
+    p = add_command(
+        commands,
         "campaign",
+        run_campaign_command,
         help="verify a scenario at scale: many true plants, disturbances and initial states",
         description="Run SCENARIO many times, each run with its own true parameters (all vertices "
         "of the box when 2^n_uncertain <= RUNS, else RUNS/2 random vertices; the rest uniform "
@@ -102,7 +105,6 @@ def register(commands) -> None:
     add_output_arguments(
         p, str(RESULTS_ROOT / "campaign" / "SCENARIO"), what="records, runs, summary and histogram"
     )
-    p.set_defaults(handler=run_campaign_command)
 
 
 def run_campaign_command(args) -> int:

@@ -6,6 +6,7 @@ from ..names import KR_CANDIDATES
 from .common import (
     EXIT_OK,
     add_certificate_arguments,
+    add_command,
     add_json_argument,
     add_progress_argument,
     print_json,
@@ -16,8 +17,10 @@ from .common import (
 def register(commands) -> None:
     from .simulate import add_scenario_arguments
 
-    p = commands.add_parser(
+    p = add_command(
+        commands,
         "certify",
+        run_certify,
         help="say whether the tracking guarantee holds for a scenario, and down to which epsilon",
         description="Synthesize the interval controller of a scenario (a file, a shipped name "
         "such as rr_planar/s3_ic1, or --robot with its box) and check the conditions of its "
@@ -43,7 +46,6 @@ def register(commands) -> None:
     add_json_argument(p)
     add_certificate_arguments(p, skippable=False)
     add_progress_argument(p, "no progress line (shown only when stderr is a terminal)")
-    p.set_defaults(handler=run_certify)
 
 
 def run_certify(args) -> int:

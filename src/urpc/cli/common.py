@@ -57,6 +57,32 @@ class Parser(argparse.ArgumentParser):
         raise InputError(f"{message} (see '{self.prog} --help')")
 
 
+def add_command(
+    commands,
+    name: str,
+    handler,
+    *,
+    help: str,
+    description: str | None = None,
+    epilog: str | None = None,
+) -> Parser:
+    """The command ``name`` of ``commands`` (from :func:`add_subcommands`), run by
+    ``handler(args)`` (its exit code; ``None`` for a command whose subcommands each have one):
+    ``help`` is its line in the parent's ``--help``, ``description`` and ``epilog`` its own."""
+    parser = commands.add_parser(name, help=help, description=description, epilog=epilog)
+    if handler is not None:
+        parser.set_defaults(handler=handler)
+    return parser
+
+
+def add_subcommands(parser: argparse.ArgumentParser, dest: str, metavar: str, required=False):
+    """The subcommands of ``parser`` (:func:`add_command` adds each), their name stored in
+    ``dest``: :class:`Parser` instances, so that they keep the error contract."""
+    commands = parser.add_subparsers(dest=dest, metavar=metavar, parser_class=Parser)
+    commands.required = required
+    return commands
+
+
 def vector(text: str) -> np.ndarray:
     """Parse ``"0.1,0.2"`` or ``"0.1 0.2"`` into a float vector (NaN/inf rejected)."""
     import numpy as np
@@ -147,6 +173,11 @@ def add_robot_arguments(parser: argparse.ArgumentParser, uncertainty_required: b
         required=uncertainty_required,
         help=UNCERTAINTY_HELP,
     )
+    add_lock_argument(parser)
+
+
+def add_lock_argument(parser) -> None:
+    """``--lock JOINTS``: joints locked at 0 (:func:`names`; default: none)."""
     parser.add_argument("--lock", type=names, default=[], metavar="JOINTS", help=LOCK_HELP)
 
 

@@ -8,8 +8,9 @@ from pathlib import Path
 from .common import (
     EXIT_OK,
     RESULTS_ROOT,
-    Parser,
+    add_command,
     add_output_arguments,
+    add_subcommands,
     finite_float,
     names,
     non_negative_float,
@@ -26,16 +27,19 @@ TOOL_CHANGE_OUT = RESULTS_ROOT / "tool-change"
 
 
 def register(commands) -> None:
-    demo = commands.add_parser(
+    demo = add_command(
+        commands,
         "demo",
+        None,  # each demo has its own handler
         help="run a demonstration (reconfigurable arm, tool change)",
         description="Demonstrations of on-the-fly synthesis for modular arms.",
     )
-    demos = demo.add_subparsers(dest="demo", metavar="DEMO", parser_class=Parser)
-    demos.required = True
+    demos = add_subcommands(demo, "demo", "DEMO", required=True)
 
-    p = demos.add_parser(
+    p = add_command(
+        demos,
         "reconfigure",
+        run_reconfigure,
         help="synthesize and simulate a sequence of arm configurations",
         description="Run a sequence of modular-arm configurations (default: the shipped "
         "assemblies arm_3dof, arm_4dof, arm_4dof_vacuum). Each one is composed from its modules, "
@@ -53,10 +57,11 @@ def register(commands) -> None:
         "(default: arm_3dof,arm_4dof,arm_4dof_vacuum)",
     )
     _common_arguments(p, RECONFIGURE_OUT)
-    p.set_defaults(handler=run_reconfigure)
 
-    p = demos.add_parser(
+    p = add_command(
+        demos,
         "tool-change",
+        run_tool_change,
         help="change the payload during a run; the controller switches boxes without a restart",
         description="Run the 4-DOF gripper arm (arm_4dof, about 1 kg); at --t-change the true "
         "payload becomes about 3 kg (arm_4dof_3kg) and the controller switches to the new box, "
@@ -90,7 +95,6 @@ def register(commands) -> None:
         help="delay between the change and the controller's switch [s] (default: 0)",
     )
     _common_arguments(p, TOOL_CHANGE_OUT)
-    p.set_defaults(handler=run_tool_change)
 
 
 def _common_arguments(p: argparse.ArgumentParser, out: Path) -> None:

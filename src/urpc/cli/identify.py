@@ -10,11 +10,11 @@ from pathlib import Path
 from ..errors import InputError
 from .common import (
     EXIT_OK,
-    LOCK_HELP,
+    add_command,
     add_json_argument,
+    add_lock_argument,
     add_new_file_arguments,
     add_robot_positional,
-    names,
     non_negative_float,
     positive_float,
     positive_int,
@@ -23,8 +23,10 @@ from .common import (
 
 
 def register(commands) -> None:
-    p = commands.add_parser(
+    p = add_command(
+        commands,
         "identify",
+        run_identify,
         help="identify a sound parameter box from recorded data (or --excite: write an "
         "exciting trajectory)",
         description="From recorded samples (CSV or NPZ with t, q1..qn, tau1..taun and "
@@ -60,7 +62,7 @@ def register(commands) -> None:
         "section); with --excite: excite the parameters of a body fixed to LINK",
     )
     add_new_file_arguments(p)
-    p.add_argument("--lock", type=names, default=[], metavar="JOINTS", help=LOCK_HELP)
+    add_lock_argument(p)
     p.add_argument(
         "--jerk-bound",
         type=non_negative_float,
@@ -113,7 +115,6 @@ def register(commands) -> None:
     )
     p.add_argument("--seed", type=int, default=0, metavar="N", help="--excite: seed (default 0)")
     add_json_argument(p)
-    p.set_defaults(handler=run_identify)
 
 
 def noise(text: str):

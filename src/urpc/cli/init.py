@@ -10,6 +10,7 @@ from pathlib import Path
 from ..errors import InputError
 from .common import (
     EXIT_OK,
+    add_command,
     add_json_argument,
     add_new_file_arguments,
     add_robot_positional,
@@ -30,8 +31,10 @@ def _escaped(text: str) -> str:
 
 
 def register(commands) -> None:
-    p = commands.add_parser(
+    p = add_command(
+        commands,
         "init",
+        run_init,
         help="write a starting uncertainty box for a robot (every moving link, ready to edit)",
         description="Write an uncertainty file (docs/uncertainty-format.md) for ROBOT: every "
         "moving link with a mass gets its URDF mass +- MASS, center of mass +- COM and inertia "
@@ -80,7 +83,6 @@ def register(commands) -> None:
         help="comma-separated joints to lock (at 0), as given to check and simulate",
     )
     add_json_argument(p)
-    p.set_defaults(handler=run_init)
 
 
 def percentage(text: str) -> float:

@@ -6,6 +6,7 @@ from ..errors import InputError
 from .common import (
     BOUND_METHODS,
     EXIT_OK,
+    add_command,
     add_json_argument,
     add_robot_arguments,
     count,
@@ -17,22 +18,26 @@ from .common import (
 
 
 def register(commands) -> None:
-    p = commands.add_parser("robots", help="list the robots that can be loaded by name")
+    p = add_command(
+        commands, "robots", run_robots, help="list the robots that can be loaded by name"
+    )
     add_json_argument(p)
-    p.set_defaults(handler=run_robots)
 
-    p = commands.add_parser(
+    p = add_command(
+        commands,
         "check",
+        run_check,
         help="validate a robot and an uncertainty file, print the box",
         description="Load ROBOT, validate the uncertainty file against it, and print the box: "
         "links, parameters, nominal values, bounds and relative widths.",
     )
     add_robot_arguments(p)
     add_json_argument(p)
-    p.set_defaults(handler=run_check)
 
-    p = commands.add_parser(
+    p = add_command(
+        commands,
         "bound",
+        run_bound,
         help="enclose the mismatch torque w at one state",
         description="Enclose the mismatch torque w = Y_SL (pi - pi0) - d over the box at one "
         "state, and print lower, upper and rho = max(|lower|, |upper|) per joint [N m].",
@@ -52,7 +57,6 @@ def register(commands) -> None:
         help="bound method (default: by box kind)",
     )
     add_json_argument(p)
-    p.set_defaults(handler=run_bound)
 
 
 def run_robots(args) -> int:

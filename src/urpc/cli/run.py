@@ -6,15 +6,25 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .common import EXIT_OK, add_json_argument, json_text, non_negative_int, positive_float
+from ..names import SAFE_MODES, SAMPLED_LAWS
+from .common import (
+    EXIT_OK,
+    add_command,
+    add_json_argument,
+    json_text,
+    non_negative_int,
+    positive_float,
+)
 
 #: Exit code of a run stopped by a fault or the watchdog.
 EXIT_STOPPED = 1
 
 
 def register(commands) -> None:
-    p = commands.add_parser(
+    p = add_command(
+        commands,
         "run",
+        run_robot,
         help="run a scenario's controller on a robot over UDP (e.g. urpc virtual-robot)",
         description="Synthesize the scenario's interval controller (or load --controller FILE), "
         "connect to the robot at --robot-address and track the scenario's trajectory in real "
@@ -62,7 +72,7 @@ def register(commands) -> None:
     )
     p.add_argument(
         "--sampled-law",
-        choices=("implicit", "paper"),
+        choices=SAMPLED_LAWS,
         help="law of the interval controller (default: the scenario's)",
     )
     p.add_argument(
@@ -74,7 +84,7 @@ def register(commands) -> None:
     )
     p.add_argument(
         "--safe-mode",
-        choices=("zero", "damping"),
+        choices=SAFE_MODES,
         default="damping",
         help="safe command on a fault (damping)",
     )
@@ -104,7 +114,6 @@ def register(commands) -> None:
         help="save result.npz, result.csv, summary.json, run.json",
     )
     add_json_argument(p, on_stdout=True)
-    p.set_defaults(handler=run_robot)
 
 
 def run_robot(args) -> int:

@@ -15,6 +15,7 @@ from .common import (
     RESULTS_ROOT,
     ROBOT_HELP,
     add_certificate_arguments,
+    add_command,
     add_output_arguments,
     add_scenario_argument,
     add_uncertainty_option,
@@ -44,8 +45,10 @@ PAPER_OUT = RESULTS_ROOT / "paper"
 
 
 def register(commands) -> None:
-    p = commands.add_parser(
+    p = add_command(
+        commands,
         "simulate",
+        run_simulate,
         help="synthesize a controller and simulate it against a true plant",
         description="Simulate one run, from a scenario file (a path or a shipped name such as "
         "rr_planar/s2_ic1; see docs/scenarios.md) or straight from a robot and an uncertainty "
@@ -66,10 +69,11 @@ def register(commands) -> None:
     output = p.add_argument_group("output")
     add_output_arguments(output, None)
     output.add_argument("--replay", action="store_true", help=REPLAY_HELP)
-    p.set_defaults(handler=run_simulate)
 
-    p = commands.add_parser(
+    p = add_command(
+        commands,
         "reproduce-paper",
+        run_reproduce_paper,
         help="run the paper's six scenarios with both controllers; figures and a results table",
         description="Reproduce Giusti & Althoff Sec. IV: scenarios 1-3 of Table II with the "
         "initial conditions IC1 and IC2, each with the interval controller and r-alpha (12 "
@@ -90,7 +94,6 @@ def register(commands) -> None:
         help="parallel processes (default: 2)",
     )
     add_output_arguments(p, str(PAPER_OUT), what="report, figures and runs")
-    p.set_defaults(handler=run_reproduce_paper)
 
 
 def add_scenario_arguments(p, simulate: bool = True) -> None:

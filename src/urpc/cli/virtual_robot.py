@@ -3,12 +3,13 @@
 
 from __future__ import annotations
 
+from ..names import PLANT_BACKENDS, VELOCITY_MODES
 from .common import (
     EXIT_OK,
-    LOCK_HELP,
+    add_command,
+    add_lock_argument,
     add_robot_positional,
     add_uncertainty_option,
-    names,
     non_negative_float,
     non_negative_int,
     positive_float,
@@ -49,8 +50,10 @@ def _fraction(text: str) -> float:
 
 
 def register(commands) -> None:
-    p = commands.add_parser(
+    p = add_command(
+        commands,
         "virtual-robot",
+        run_virtual_robot,
         help="run a plant as a torque-controlled arm over UDP on 127.0.0.1 (for urpc run)",
         description="Run the true plant of ROBOT (Pinocchio or MuJoCo) in wall-clock time at the "
         "robot's rate, streaming its state to a controller over UDP on 127.0.0.1 and applying the "
@@ -69,7 +72,7 @@ def register(commands) -> None:
         help="true parameter point file, 'nominal', or 'sample' (seeded draw from the box); "
         "default: the robot's shipped true_parameters.yaml, else nominal",
     )
-    p.add_argument("--lock", type=names, default=[], metavar="JOINTS", help=LOCK_HELP)
+    add_lock_argument(p)
     p.add_argument("--port", type=_port, required=True, metavar="P", help="UDP port on 127.0.0.1")
     p.add_argument(
         "--period", type=positive_float, default=1e-3, metavar="S", help="robot period [s] (1e-3)"
@@ -93,7 +96,7 @@ def register(commands) -> None:
     )
     p.add_argument(
         "--velocity",
-        choices=("measured", "difference"),
+        choices=VELOCITY_MODES,
         default="measured",
         help="velocity sent: the plant's (measured), or the backward difference of the sent positions",
     )
@@ -152,11 +155,10 @@ def register(commands) -> None:
     )
     p.add_argument(
         "--plant",
-        choices=("pinocchio", "mujoco"),
+        choices=PLANT_BACKENDS,
         default="pinocchio",
         help="plant backend (pinocchio)",
     )
-    p.set_defaults(handler=run_virtual_robot)
 
 
 def run_virtual_robot(args) -> int:

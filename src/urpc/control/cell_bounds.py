@@ -50,20 +50,32 @@ class InertiaModel:
 
 
 def inertia_model(
-    center: Ball, derivatives: Ball, radii: np.ndarray
+    center: Ball,
+    slopes: Ball,
+    radii: np.ndarray,
+    ball: float,
+    remainder: np.ndarray,
+    slope_spread: np.ndarray,
 ) -> tuple[InertiaModel, np.ndarray]:
-    """The model of a symmetric matrix over a box of ``q``, from its value at the box's centre
-    (``center``, a ball of rounding width) and its partial derivatives over the box
-    (``derivatives``: (cells, k, n, n), ``dM/dq_k`` enclosed over the whole box; ``radii``:
-    (cells, k), the box's half-widths): by the mean value theorem
-    ``M(q) - M_c = sum_k (q_k - q_c,k) dM/dq_k(xi)``, so that with ``P = L^-1``
+    """The model of a symmetric matrix over the states ``q = q_c + x + e`` with ``|x_k| <= r_k``
+    and ``||e||_2 <= ball`` (a cell of the reference and the tube around it), from its value at
+    the centre (``center``, a ball of rounding width), its partial derivatives at the centre
+    (``slopes``: (cells, k, n, n), ``D_k = dM/dq_k(q_c)``, a ball of rounding width) and bounds of
+    its second derivatives over the region (:func:`taylor_terms`). By Taylor's theorem with the
+    Lagrange remainder, ``M(q) - M_c = sum_k dq_k D_k + Z(dq)`` with ``|Z| <= remainder``
+    entrywise, so that with ``P = L^-1``
 
-        ||P (M(q) - M_c) P^T|| <= || |P| R_c |P|^T || + sum_k r_k s_k,
-        s_k = ||P D_k P^T||_2 + || |P| rad(D_k) |P|^T ||_2   (D_k the centre of dM/dq_k)
+        ||P (M(q) - M_c) P^T|| <= || |P| R_c |P|^T || + sum_k r_k s_k + ball ||s||_2
+                                  + || |P| remainder |P|^T ||,
+        s_k = ||P D_k P^T||_2 + || |P| rad(D_k) |P|^T ||_2
 
-    which keeps the structure of each derivative (an entrywise bound of ``M(q) - M_c`` alone
-    loses it through ``|P|`` where the lightest mode couples the joints). Returns the model and
-    ``s_k`` per cell (cells, k), for rates ``dM/dt = sum_k qd_k dM/dq_k``."""
+    (``sum_k |e_k| s_k <= ||e||_2 ||s||_2``: the tube is a ball, which its bounding box would
+    over-state by up to ``sqrt(n)``). The first-order part keeps the structure of each
+    derivative (an entrywise bound loses it through ``|P|`` where the lightest mode couples the
+    joints); only the second-order part goes through ``|P|``. Over the region ``dM/dq_k`` differs
+    from ``D_k`` by at most ``slope_spread`` (cells, k, n, n) entrywise, so the slopes returned
+    for rates ``dM/dt = sum_k qd_k dM/dq_k`` are ``(s_k + || |P| spread_k |P|^T ||) /
+    lambda_min(P M_c P^T)`` per cell (cells, k)."""
     mid = center.mid
     eigenvalues = np.linalg.eigvalsh(mid)
     lam_min, lam_max = eigenvalues[..., 0], eigenvalues[..., -1]
@@ -76,14 +88,40 @@ def inertia_model(
     floor = np.linalg.eigvalsh(P @ safe @ Pt)[..., 0]
     absolute, absolute_t = np.abs(P), np.abs(Pt)
     Pk, Pkt = P[:, None], Pt[:, None]
-    slopes = spectral_norm(Pk @ derivatives.mid @ Pkt) + spectral_norm(
-        absolute[:, None] @ derivatives.rad @ absolute_t[:, None]
+    first = spectral_norm(Pk @ slopes.mid @ Pkt) + spectral_norm(
+        absolute[:, None] @ slopes.rad @ absolute_t[:, None]
     )
-    slopes = slopes * (1 + LAPACK_MARGIN)
-    spread = spectral_norm(absolute @ center.rad @ absolute_t) + np.sum(radii * slopes, axis=-1)
+    first = first * (1 + LAPACK_MARGIN)
+    spread = (
+        spectral_norm(absolute @ center.rad @ absolute_t)
+        + np.sum(radii * first, axis=-1)
+        + ball * np.sqrt(np.sum(first * first, axis=-1))
+        + spectral_norm(absolute @ remainder @ absolute_t)
+    )
     eps = spread / floor * (1 + LAPACK_MARGIN) + LAPACK_MARGIN
     model = InertiaModel(mid, P, eps, lam_min, lam_max, positive & (eps < 1))
-    return model, slopes / floor[:, None]
+    rates = first + spectral_norm(absolute[:, None] @ slope_spread @ absolute_t[:, None])
+    return model, rates * (1 + LAPACK_MARGIN) / floor[:, None]
+
+
+def taylor_terms(
+    curvatures: Ball, group: np.ndarray, widths: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Entrywise bounds of the second-order terms of :func:`inertia_model` per cell: with
+    ``|H_kj| <= |mid| + rad`` the second derivatives over a box that holds the cell's region
+    (``curvatures``: (groups, k, j, models, n, n), cell ``c`` in box ``group[c]``) and ``|dq_k| <=
+    w_k`` (``widths``: (cells, k)), the Lagrange remainder ``1/2 sum_kj |dq_k| |dq_j| |H_kj|``
+    (cells, models, n, n) and the change of each first derivative over the region, ``sum_j w_j
+    |H_kj|`` (cells, k, models, n, n)."""
+    magnitude = (np.abs(curvatures.mid) + curvatures.rad) * (1 + 1e-12)
+    w = widths * (1 + 1e-12)
+    cells, (n, _, models, rows, columns) = len(group), magnitude.shape[1:]
+    spread = np.empty((cells, n, models, rows, columns))
+    for box in np.unique(group):
+        members = np.flatnonzero(group == box)
+        spread[members] = np.einsum("cj,kjmab->ckmab", w[members], magnitude[box])
+    remainder = 0.5 * np.einsum("ck,ckmab->cmab", w, spread)
+    return remainder * (1 + 1e-12), spread * (1 + 1e-12)
 
 
 def spectral_norm(X: np.ndarray) -> np.ndarray:
@@ -164,47 +202,57 @@ class CenteredCoriolis:
 
     def __init__(
         self,
-        regressor: BallRegressor,
-        q: Ball,
-        v_center: np.ndarray,
-        parameters: Ball,
-        christoffel: Ball,
+        radii: np.ndarray,
+        center: Ball,
+        per_velocity: Ball,
+        per_parameter: Ball | None,
+        per_both: Ball | None,
     ):
-        """``christoffel``: ``C(q; e_k)`` for the centre of ``parameters`` and each of its
-        directions, (cells, k, 1 + free, n, n), as :meth:`sharing` encloses it."""
-        pi_center = Ball.point(parameters.mid)
-        free = np.flatnonzero(parameters.rad > 0)
-        self.pi_rad = parameters.rad[free]
-        directions = unit_directions(parameters)
-        v_point = Ball.point(v_center)
-        self.center = regressor.coriolis_matrices(q, v_point, pi_center[None])[:, 0]
-        self.per_velocity = christoffel[:, :, 0]
-        self.per_parameter = self.per_both = None
-        if len(free):
-            self.per_parameter = regressor.coriolis_matrices(q, v_point, directions)
-            self.per_both = christoffel[:, :, 1:]  # (cells, k, j, n, n)
+        """The four terms over the cells, as :meth:`sharing` encloses them: ``radii`` the
+        parameter box's radii along the shared directions ``e_j`` (zero where this box is exact),
+        ``center`` ``C(q; v_c, pi_c)`` (cells, n, n), ``per_velocity`` ``C(q; e_k, pi_c)`` (cells,
+        k, n, n), ``per_parameter`` ``C(q; v_c, e_j)`` (cells, j, n, n) and ``per_both`` ``C(q;
+        e_k, e_j)`` (cells, k, j, n, n) (``None`` without directions)."""
+        self.pi_rad = radii
+        self.center, self.per_velocity = center, per_velocity
+        self.per_parameter, self.per_both = per_parameter, per_both
 
     @classmethod
     def sharing(
         cls, regressor: BallRegressor, q: Ball, forms: list[tuple[np.ndarray, Ball]]
     ) -> list[CenteredCoriolis]:
-        """One form per ``(v_center, parameters)`` over the same box of ``q``, for parameter
-        boxes of the same radii (a box and its offset, as the plant's hull and the mismatch):
-        ``C(q; e_k)`` of their common directions is enclosed once, with every centre, in one
-        call (each row is computed as it would be alone, up to the order of rounding)."""
-        radii = forms[0][1].rad
-        if any(not np.array_equal(parameters.rad, radii) for _, parameters in forms):
-            raise ValueError("CenteredCoriolis.sharing needs parameter boxes of equal radii")
-        centres = np.stack([parameters.mid for _, parameters in forms])
-        rows = Ball.point(np.concatenate([centres, unit_directions(forms[0][1])]))
-        each = regressor.christoffel_matrices(q, rows)
+        """One form per ``(v_center, parameters)`` over the same box of ``q`` (boxes of any
+        centres and radii: the plant's hull and the mismatch, of each piece of the box). The
+        terms that do not depend on a box's centre or radii are enclosed once for all: ``C(q;
+        e_k, e_j)`` along the union of the boxes' directions, with every centre's ``C(q; e_k,
+        pi_c)``, in one call, and ``C(q; v_c, .)`` of every centre and direction in one call per
+        distinct ``v_c`` (each row is computed as it would be alone, up to the order of
+        rounding)."""
+        free = np.flatnonzero(np.any([parameters.rad > 0 for _, parameters in forms], axis=0))
+        size = forms[0][1].mid.shape[0]
+        directions = np.zeros((len(free), size))
+        directions[np.arange(len(free)), free] = 1.0
         count = len(forms)
+        centres = np.stack([parameters.mid for _, parameters in forms])
+        each = regressor.christoffel_matrices(q, Ball.point(np.concatenate([centres, directions])))
+        per_both = each[:, :, count:] if len(free) else None
+        by_velocity: dict[bytes, tuple[list[int], Ball]] = {}
+        for index, (v_center, _) in enumerate(forms):
+            key = np.ascontiguousarray(v_center).tobytes()
+            by_velocity.setdefault(key, ([], v_center))[0].append(index)
+        centre_terms: dict[int, tuple[Ball, Ball | None]] = {}
+        for indices, v_center in by_velocity.values():
+            rows = np.concatenate([centres[indices], directions])
+            values = regressor.coriolis_matrices(q, Ball.point(v_center), Ball.point(rows))
+            along = values[:, len(indices) :] if len(free) else None
+            for position, index in enumerate(indices):
+                centre_terms[index] = (values[:, position], along)
         return [
             cls(
-                regressor, q, v_center, parameters,
-                each[:, :, np.r_[index, count : each.shape[2]]],
+                parameters.rad[free], centre_terms[index][0], each[:, :, index],
+                centre_terms[index][1], per_both,
             )
-            for index, (v_center, parameters) in enumerate(forms)
+            for index, (_, parameters) in enumerate(forms)
         ]  # fmt: skip
 
     def coefficients(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -212,19 +260,29 @@ class CenteredCoriolis:
         over the boxes (``P``: (cells, n, n); ``dv``: the velocity radii, (cells, n))."""
         absolute = np.abs(P)
 
-        def through(Q: np.ndarray, X: np.ndarray) -> np.ndarray:
+        def congruent(Q: np.ndarray, X: np.ndarray) -> np.ndarray:
             index = (slice(None),) + (None,) * (X.ndim - 3)
-            return spectral_norm(Q[index] @ X @ np.swapaxes(Q, -1, -2)[index])
+            return Q[index] @ X @ np.swapaxes(Q, -1, -2)[index]
+
+        def through(Q: np.ndarray, X: np.ndarray) -> np.ndarray:
+            return spectral_norm(congruent(Q, X))
 
         def structured(X: Ball) -> np.ndarray:
             return through(P, X.mid) + through(absolute, X.rad)
 
         def summed(X: Ball, weights: np.ndarray) -> np.ndarray:
-            """``sup ||P sum_j dpi_j X_j P^T||`` over ``|dpi_j| <= weights_j`` (axis -3 is j):
-            the centres by the triangle inequality, the (non-negative) radii summed first,
-            ``|| |P| sum_j w_j R_j |P|^T ||``, which is no larger and costs one norm."""
+            """``sup ||P sum_j dpi_j X_j P^T||`` over ``|dpi_j| <= weights_j`` (axis -3 is j).
+            The centres: ``|sum_j dpi_j Y_j| <= sum_j w_j |Y_j|`` entrywise (``Y_j = P X_j
+            P^T``), and the spectral norm is monotone on non-negative matrices (``||A|| <= |||A|||
+            <= ||B||`` for ``|A| <= B``), so one norm bounds them all; with few directions the
+            triangle inequality ``sum_j w_j ||Y_j||`` is also tried, the smaller kept. The
+            (non-negative) radii are summed first, ``|| |P| sum_j w_j R_j |P|^T ||``."""
+            Y = congruent(P, X.mid)
+            centres = spectral_norm(np.einsum("...jab,j->...ab", np.abs(Y), weights))
+            if len(weights) <= TRIANGLE_DIRECTIONS:
+                centres = np.minimum(centres, spectral_norm(Y) @ weights)
             radius = np.einsum("...jab,j->...ab", X.rad, weights)
-            return through(P, X.mid) @ weights + through(absolute, radius)
+            return centres + through(absolute, radius)
 
         constant = structured(self.center)
         per_velocity = structured(self.per_velocity)
@@ -234,46 +292,38 @@ class CenteredCoriolis:
         return constant * (1 + LAPACK_MARGIN), per_velocity * (1 + LAPACK_MARGIN)
 
 
+#: Up to this many parameter directions, a Coriolis form's parameter part is also bounded by the
+#: triangle inequality (one norm per direction; it can beat the entrywise sum for a few).
+TRIANGLE_DIRECTIONS = 24
+
 #: The Coriolis forms are enclosed over at most this many bytes of recursion at a time (their
 #: Christoffel batch grows as ``n^4`` per cell: a 10-link chain holds 5 MB per cell).
 CORIOLIS_CHUNK_BYTES = 2**28
 
 
 def coriolis_coefficients(
-    regressor: BallRegressor,
-    q: Ball,
-    forms: list[tuple[np.ndarray, Ball]],
-    factors: list[np.ndarray],
-) -> list[list[tuple[np.ndarray, np.ndarray]]]:
-    """:meth:`CenteredCoriolis.coefficients` of each form of :meth:`CenteredCoriolis.sharing`
-    through each factor ``P`` ((cells, n, n)), computed over chunks of cells so that memory
-    stays bounded whatever the arm (every cell's enclosure is independent of the others'):
-    ``out[form][factor] = (A, B)``."""
+    regressor: BallRegressor, q: Ball, forms: list[tuple[np.ndarray, Ball, np.ndarray]]
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:meth:`CenteredCoriolis.coefficients` of each form ``(v_center, parameters, P)`` of
+    :meth:`CenteredCoriolis.sharing` through its factor ``P`` ((cells, n, n)), computed over
+    chunks of cells so that memory stays bounded whatever the arm (every cell's enclosure is
+    independent of the others'): ``out[form] = (A, B)``."""
     cells, n = q.mid.shape
-    rows = len(forms) + int(np.count_nonzero(forms[0][1].rad))
+    free = np.count_nonzero(np.any([parameters.rad > 0 for _, parameters, _ in forms], axis=0))
+    rows = len(forms) + int(free)
     per_cell = n * (n + 1) // 2 * rows * n * 3 * 8 * 4  # the backward pass's force rows
     chunk = max(1, int(CORIOLIS_CHUNK_BYTES // max(per_cell, 1)))
-    parts: list[list[list[tuple[np.ndarray, np.ndarray]]]] = []
+    parts: list[list[tuple[np.ndarray, np.ndarray]]] = []
     for start in range(0, cells, chunk):
         part = slice(start, min(cells, start + chunk))
-        chunk_forms = [(v[part], parameters) for v, parameters in forms]
+        chunk_forms = [(v[part], parameters) for v, parameters, _ in forms]
         shared = CenteredCoriolis.sharing(regressor, q[part], chunk_forms)
-        parts.append([[form.coefficients(P[part]) for P in factors] for form in shared])
+        parts.append(
+            [form.coefficients(P[part]) for form, (_, _, P) in zip(shared, forms, strict=True)]
+        )
     return [
-        [
-            tuple(np.concatenate([p[f][k][i] for p in parts]) for i in range(2))
-            for k in range(len(factors))
-        ]
-        for f in range(len(forms))
+        tuple(np.concatenate([p[f][i] for p in parts]) for i in range(2)) for f in range(len(forms))
     ]
-
-
-def unit_directions(parameters: Ball) -> np.ndarray:
-    """The unit vectors of the parameters with a non-zero radius, (free, parameters)."""
-    free = np.flatnonzero(parameters.rad > 0)
-    directions = np.zeros((len(free), parameters.mid.shape[0]))
-    directions[np.arange(len(free)), free] = 1.0
-    return directions
 
 
 def velocity_bound(

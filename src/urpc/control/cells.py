@@ -1,7 +1,8 @@
 """The sampled-data floor of the implicit law, bounded over whole cells of time (docs/sampled-data.md §2).
 
-The reference ``[0, duration]`` is cut into cells; each cell is widened by the period that follows
-its last sample. Over a cell, the reference lies in a box (:meth:`Trajectory.enclose`, Taylor with
+The reference ``[0, duration]`` (one period of a periodic reference, whose states repeat:
+:func:`urpc.trajectories.covered_span`) is cut into cells; each cell is widened by the period
+that follows its last sample. Over a cell, the reference lies in a box (:meth:`Trajectory.enclose`, Taylor with
 a sound jerk bound), the tube ``||e|| <= rho`` (and ``||r|| <= r_max``) adds a box of errors, and
 every quantity of the one-period bound is enclosed over that box of states *and* over the
 parameter box by ball arithmetic (:mod:`urpc.model.regressor_balls`): inertia matrices and their
@@ -22,7 +23,7 @@ import numpy as np
 
 from ..model.inertia_bounds import InertiaBounds
 from ..model.regressor_balls import Ball, BallRegressor, Jet, matvec, parameters_of
-from ..trajectories import Trajectory
+from ..trajectories import Trajectory, covered_span
 from .box_pieces import split_box
 from .cell_bounds import (
     LAPACK_MARGIN,
@@ -33,6 +34,7 @@ from .cell_bounds import (
     inertia_model,
     link_parameters,
     plant_hull,
+    taylor_terms,
     velocity_bound,
 )
 from .interval import IntervalPassivityController
@@ -42,6 +44,11 @@ from .sampled_joints import JointTerms
 CELL_MOTION = 0.01
 #: Bounds on the number of cells.
 MIN_CELLS, MAX_CELLS = 16, 4000
+#: The inertia models' second derivatives are enclosed over boxes of at least this many
+#: consecutive cells (more on long chains, :meth:`CellFloor._inertia_models`).
+CURVATURE_CELLS = 4
+#: ... at most this many bytes of their recursion at a time.
+CURVATURE_CHUNK_BYTES = 2**28
 
 
 class CellFloor:
@@ -51,7 +58,8 @@ class CellFloor:
         controller: An implicit sampled-data controller (or any interval controller, for the
             inertia figures of Theorem 1).
         trajectory: The reference; it must give :meth:`Trajectory.jerk_bound`.
-        duration: The time span covered [s].
+        duration: The time span covered [s] (one period of a periodic reference when shorter:
+            :attr:`span`).
         cells: Number of cells (default: the reference moves at most :data:`CELL_MOTION` per
             joint within a cell, between :data:`MIN_CELLS` and :data:`MAX_CELLS`).
     """
@@ -74,12 +82,14 @@ class CellFloor:
         self.law_bounds = controller.inertia_bounds or InertiaBounds(robot, box)
         self.joints = JointTerms(controller.bound.joints)
         self.regressor = BallRegressor(robot)
+        # A periodic reference repeats its states: one period covers the whole duration.
+        self.span = covered_span(trajectory, self.duration)
         if cells is None:
-            probe = np.linspace(0.0, self.duration, 257)
+            probe = np.linspace(0.0, self.span, 257)
             speed = float(np.max(np.abs(np.atleast_2d(trajectory.evaluate(probe)[1]))))
-            cells = int(math.ceil(self.duration * speed / CELL_MOTION))
+            cells = int(math.ceil(self.span * speed / CELL_MOTION))
         self.cells = int(np.clip(cells, MIN_CELLS, MAX_CELLS))
-        self.edges = np.linspace(0.0, self.duration, self.cells + 1)
+        self.edges = np.linspace(0.0, self.span, self.cells + 1)
         # Models: nominal, the law's lower bound, then (lower, upper) per piece.
         self.pieces = split_box(box)
         piece_bounds = [InertiaBounds(robot, piece) for piece in self.pieces]
@@ -90,6 +100,7 @@ class CellFloor:
         self._armature = np.stack([np.asarray(m.model.armature, dtype=float) for m in models])
         self._links = [[link_parameters(robot, b) for b in p.uncertain_links] for p in self.pieces]
         self._plant_hull = plant_hull(robot, box)
+        self._piece_hulls = [plant_hull(robot, piece) for piece in self.pieces]
         self._cache: dict[tuple, dict] = {}
         self._tube_cache: dict[tuple, dict] = {}
 
@@ -185,24 +196,29 @@ class CellFloor:
             return self._tube_cache[key]
         cells = self.cells
         q, qd_a, qdd_a, _ = self._states(tube, 0.0, extension)
-        models, model_slopes = self._inertia_models(q.val)
+        reference_q = self._states(0.0, 0.0, extension)[0].val
+        models, model_slopes = self._inertia_models(q.val, reference_q.rad, tube)
         nominal, law = models[0], models[1]
         # d/dt w = (rate along the reference at a fixed e) + (Jacobian along e) ed.
         reference = self._states(tube, 0.0, extension, along_reference=True)
         Y = self.regressor.slotine_li(reference[0], reference[1], reference[1], reference[2])
         center, tube_jacobian = self._mismatch_parts(tube, extension)
         hull = self._plant_hull
-        mismatch = Ball(hull.mid - self._parameters[0], hull.rad)
-        # The plant's Coriolis matrix (every plant of the box, over the plant's velocity box,
-        # affine in its radii) and the Coriolis mismatch along qd_a, as centered forms.
-        # Through each piece's M_L factor (cell by cell chunks, see coriolis_coefficients).
+        # The plant's Coriolis matrix (every plant of the piece, over the plant's velocity box,
+        # affine in its radii) and the Coriolis mismatch along qd_a, as centered forms over each
+        # piece's own parameter hull, through the piece's M_L factor (cell by cell chunks, see
+        # coriolis_coefficients).
         lowers = [models[2 + 2 * k] for k in range(len(self._links))]
-        coriolis, coriolis_mismatch = coriolis_coefficients(
-            self.regressor,
-            q.val,
-            [(q.dot.mid, hull), (qd_a.val.mid, mismatch)],
-            [lower.inverse_factor for lower in lowers],
-        )
+        forms = [
+            (q.dot.mid, piece_hull, lower.inverse_factor)
+            for piece_hull, lower in zip(self._piece_hulls, lowers, strict=True)
+        ] + [
+            (qd_a.val.mid, Ball(piece_hull.mid - self._parameters[0], piece_hull.rad),
+             lower.inverse_factor)
+            for piece_hull, lower in zip(self._piece_hulls, lowers, strict=True)
+        ]  # fmt: skip
+        coefficients = coriolis_coefficients(self.regressor, q.val, forms)
+        coriolis, coriolis_mismatch = coefficients[: len(lowers)], coefficients[len(lowers) :]
         # d/dt of the nominal torque Y_SL pi0 (held over the period while the reference moves).
         pi0 = Ball.point(self._parameters[0])
         torque_rate = matvec(Y.dot, pi0)
@@ -323,7 +339,7 @@ class CellFloor:
         over the cells at ``e = 0``: what Theorem 1 and the paper law's condition need, without
         the mismatch and Coriolis enclosures."""
         q, _, _, _ = self._states(0.0, 0.0, extension)
-        models, _ = self._inertia_models(q.val)
+        models, _ = self._inertia_models(q.val, q.val.rad, 0.0)
         lower, upper = math.inf, 0.0
         for low, high in zip(models[2::2], models[3::2], strict=True):
             lam_L = np.where(low.valid, low.lam_min * (1 - low.eps), -math.inf)
@@ -331,23 +347,50 @@ class CellFloor:
             upper = max(upper, float(np.max(high.lam_max * (1 + high.eps))) * (1 + LAPACK_MARGIN))
         return {"cells": float(self.cells), "lambda_L": lower, "lambda_U": upper}
 
-    def _inertia_models(self, q: Ball) -> tuple[list[InertiaModel], list[np.ndarray]]:
+    def _inertia_models(
+        self, q: Ball, reference_radii: np.ndarray, tube: float
+    ) -> tuple[list[InertiaModel], list[np.ndarray]]:
         """Every inertia model (nominal, the law's ``M_L``, each piece's ``M_L`` and ``M_U``) over
-        the boxes of ``q``: its value at each cell's centre and its derivatives in ``q`` over the
-        whole box (:func:`inertia_model`), with the slopes ``s_k`` for its rates."""
+        the cells of the reference (half-widths ``reference_radii``) and the tube ``||e|| <=
+        tube`` around them, ``q`` a box that holds both: its value at each cell's centre and its
+        derivatives in ``q`` over the whole box (:func:`inertia_model`), with the slopes ``s_k``
+        for its rates."""
         n, cells = self.dof, q.mid.shape[0]
         centers = self.regressor.mass_matrices(Ball.point(q.mid), self._parameters)
         diagonal = np.einsum("pi,ij->pij", self._armature, np.eye(n))
         centers = Ball(centers.mid + diagonal, centers.rad)  # (cells, P, n, n)
         along = Jet(
-            q.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n))),
+            Ball.point(np.broadcast_to(q.mid[:, None, :], (cells, n, n))),
             Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
         )
         slopes = self.regressor.mass_matrices(along, self._parameters).dot  # (cells, k, P, n, n)
-        pairs = [
-            inertia_model(centers[:, index], slopes[:, :, index], q.rad)
-            for index in range(len(self._parameters))
+        # Second derivatives over boxes of consecutive cells (each the hull of its cells' boxes,
+        # tube included): a second-order term, so a coarser box costs little. At least
+        # CURVATURE_CELLS, and (n + 1) / 2 on longer chains: their n (n + 1) / 2 pairs then cost
+        # what the n first derivatives do, so the cost keeps growing as n^3.
+        size = max(1, min(max(CURVATURE_CELLS, math.ceil((n + 1) / 2)), cells))
+        group = np.arange(cells) // size
+        starts = np.arange(0, cells, size)
+        lower = np.minimum.reduceat(q.mid - q.rad, starts, axis=0)
+        upper = np.maximum.reduceat(q.mid + q.rad, starts, axis=0)
+        boxes = Ball.hull(lower, upper)
+        per_box = n * (n + 1) // 2 * n * len(self._parameters) * 3 * 8 * 8
+        chunk = max(1, int(CURVATURE_CHUNK_BYTES // max(per_box, 1)))
+        parts = [
+            self.regressor.mass_matrix_curvatures(boxes[start : start + chunk], self._parameters)
+            for start in range(0, len(starts), chunk)
         ]
+        curvatures = Ball(
+            np.concatenate([p.mid for p in parts]), np.concatenate([p.rad for p in parts])
+        )
+        remainder, spread = taylor_terms(curvatures, group, reference_radii + tube)
+        pairs = [
+            inertia_model(
+                centers[:, index], slopes[:, :, index], reference_radii, tube,
+                remainder[:, index], spread[:, :, index],
+            )
+            for index in range(len(self._parameters))
+        ]  # fmt: skip
         return [model for model, _ in pairs], [slope for _, slope in pairs]
 
     def _mismatch_parts(self, tube: float, extension: float):

@@ -38,11 +38,11 @@ from typing import Any
 
 import numpy as np
 
-from ..trajectories import Trajectory
+from ..trajectories import READ_METHODS, Trajectory, defining_class
 
 #: The methods of a reference the certificate reads: its fingerprint must be defined at or below
 #: the class that defines each of them.
-_READ = ("evaluate", "reference", "jerk_bound", "enclose")
+_READ = READ_METHODS + ("period",)
 
 
 class NoKey(Exception):
@@ -66,12 +66,7 @@ def certificate_key(
         NoKey: the reference gives no fingerprint.
     """
     document = key_document(
-        controller,
-        trajectory,
-        duration=duration,
-        disturbance_bound=disturbance_bound,
-        cells=cells,
-        actuation_delay=actuation_delay,
+        controller, trajectory, duration, disturbance_bound, cells, actuation_delay
     )
     text = json.dumps(document, sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(text.encode()).hexdigest()
@@ -80,13 +75,13 @@ def certificate_key(
 def key_document(
     controller,
     trajectory: Trajectory,
-    *,
     duration: float,
-    disturbance_bound: float | None = None,
-    cells: int | None = None,
-    actuation_delay: int | None = None,
+    disturbance_bound: float | None,
+    cells: int | None,
+    actuation_delay: int | None,
 ) -> dict[str, Any]:
-    """The canonical document :func:`certificate_key` hashes (JSON data, module docstring).
+    """The canonical document :func:`certificate_key` hashes (JSON data, module docstring), of
+    the arguments of :func:`certificate_key` (all given: the defaults are its own).
 
     Raises:
         NoKey: the reference gives no fingerprint.
@@ -153,9 +148,9 @@ def trajectory_fingerprint(trajectory: Trajectory) -> dict[str, Any]:
             certificate reads (:data:`_READ`) that it overrides.
     """
     kind = type(trajectory)
-    owner = _owner(kind, "fingerprint")
+    owner = defining_class(kind, "fingerprint")
     for name in _READ:
-        if not issubclass(owner, _owner(kind, name)):
+        if not issubclass(owner, defining_class(kind, name)):
             raise NoKey(
                 f"{kind.__name__} overrides {name}() but not fingerprint(): its certificate is "
                 "not cached"
@@ -252,14 +247,6 @@ def library_versions() -> dict[str, str]:
     import scipy
 
     return {"pinocchio": pinocchio.__version__, "numpy": np.__version__, "scipy": scipy.__version__}
-
-
-def _owner(kind: type, name: str) -> type:
-    """The class of ``kind``'s method resolution order that defines ``name``."""
-    for base in kind.__mro__:
-        if name in vars(base):
-            return base
-    return object
 
 
 def _class_name(value: Any) -> str:

@@ -10,8 +10,8 @@ from typing import Any
 
 from pydantic import Field, model_validator
 
-from .base import FieldError, FileFormat
-from .uncertainty import _H, _I_O, PHYSICAL_FIELDS, JointPoint, PhysicalPoint
+from .base import FileFormat
+from .uncertainty import _H, _I_O, JointPoint, PhysicalPoint, check_one_kind
 from .values import NonNegative, Number, Positive, Text
 
 
@@ -40,12 +40,7 @@ class LinkPoint(PhysicalPoint):
 
     @model_validator(mode="after")
     def _one_kind(self) -> LinkPoint:
-        physical = [key for key in PHYSICAL_FIELDS if getattr(self, key) is not None]
-        if self.barycentric is not None and physical:
-            raise FieldError(
-                "barycentric",
-                f"a point is either physical or barycentric, not both (also found {physical})",
-            )
+        check_one_kind(self, "a point")
         return self
 
     def values(self) -> dict[str, float]:

@@ -74,12 +74,7 @@ class LinkEntry(PhysicalBox):
 
     @model_validator(mode="after")
     def _one_kind(self) -> LinkEntry:
-        physical = [key for key in PHYSICAL_FIELDS if getattr(self, key) is not None]
-        if self.barycentric is not None and physical:
-            raise FieldError(
-                "barycentric",
-                f"a link box is either physical or barycentric, not both (also found {physical})",
-            )
+        check_one_kind(self, "a link box")
         return self
 
     def entries(self) -> dict[str, Any]:
@@ -87,6 +82,21 @@ class LinkEntry(PhysicalBox):
         box = self.barycentric if self.barycentric is not None else self
         fields = BARYCENTRIC_FIELDS if self.barycentric is not None else PHYSICAL_FIELDS
         return {key: getattr(box, key) for key in fields if getattr(box, key) is not None}
+
+
+def check_one_kind(entry: Any, what: str) -> None:
+    """``entry`` (:class:`LinkEntry`, a parameter point's link) gives physical fields or a
+    ``barycentric:`` section, not both (``what`` names it in the error: ``"a link box"``).
+
+    Raises:
+        FieldError: both given, on ``barycentric``.
+    """
+    physical = [key for key in PHYSICAL_FIELDS if getattr(entry, key) is not None]
+    if entry.barycentric is not None and physical:
+        raise FieldError(
+            "barycentric",
+            f"{what} is either physical or barycentric, not both (also found {physical})",
+        )
 
 
 class PhysicalPoint(FileFormat):

@@ -239,6 +239,31 @@ class BallRegressor:
         columns = self.torques(qq, zero, unit, parameters, gravity_scale=0.0)  # (..., j, P, i)
         return intersect_symmetric(columns.map(lambda x: np.moveaxis(x, -3, -1)))
 
+    def mass_matrix_curvatures(self, q: Ball, parameters):
+        """``d^2 M / dq_k dq_j`` of each model (rows of ``parameters``, armature excluded) over the
+        boxes of ``q``: ``batch + (k, j, P, dof, dof)``, symmetric in ``k, j``. Each pair ``k <= j``
+        is one evaluation of :meth:`mass_matrices` at the hyper-dual ``q + s e_k + t e_j`` (a jet
+        of jets), whose ``d^2 / ds dt`` part is the second derivative."""
+        n = self.dof
+        batch = q.shape[:-1]
+        first, second = np.triu_indices(n)
+        pairs = len(first)
+        shape = batch + (pairs, n)
+
+        def point(x):
+            return Ball.point(np.broadcast_to(x, shape))
+
+        boxes = q.map(lambda x: np.broadcast_to(x[..., None, :], shape))
+        eye = np.eye(n)
+        hyper = Jet(Jet(boxes, point(eye[first])), Jet(point(eye[second]), point(0.0)))
+        values = self.mass_matrices(hyper, parameters).dot.dot  # batch + (pairs, P, n, n)
+        full = batch + (n, n) + values.mid.shape[len(batch) + 1 :]
+        mid, rad = np.zeros(full), np.zeros(full)
+        for source, out in ((values.mid, mid), (values.rad, rad)):
+            out[..., first, second, :, :, :] = source
+            out[..., second, first, :, :, :] = source
+        return Ball(mid, rad)
+
     def coriolis_matrices(self, q, qd, parameters):
         """The Christoffel ``C(q, qd)`` of each model over the boxes: ``batch + (P, dof, dof)``,
         column ``j`` by polarization ``(c(q, qd + e_j) - c(q, qd - e_j)) / 4``, ``c(q, x) =

@@ -43,6 +43,7 @@ from ..formats.uncertainty import (
     UncertaintyFile,
 )
 from ..formats.values import Interval
+from ..validation import check_type
 from .box_consistency import (
     NonPhysicalBoxWarning,
     corner_check,
@@ -114,10 +115,7 @@ def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) ->
         InputError: as :func:`load_uncertainty`, and a box whose ``robot:`` names another robot
             ("this box is for robot X").
     """
-    if not isinstance(robot, Robot):
-        raise InputError(
-            f"expected a Robot (urpc.load_robot(...)), got {type(robot).__name__}", field="robot"
-        )
+    check_type("robot", robot, Robot, "a Robot (urpc.load_robot(...))")
     hints = {"payload.link": robot.moving_link_names, "joints": robot.joint_names}
     spec = validate(UncertaintyFile, document, source, hints=hints)
     if spec.robot is not None and not _same_robot(spec.robot, robot):

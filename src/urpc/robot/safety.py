@@ -26,9 +26,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..names import SAFE_MODES
 
-#: The safe commands.
-SAFE_MODES = ("zero", "damping")
 #: Interventions logged in full (all are counted).
 MAX_EVENTS = 1000
 #: Kinds of intervention, in the order of the checks.

@@ -32,13 +32,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..names import VELOCITY_MODES
 from ..sim.plants import make_plant
 from ..sim.sampled import ball_samples
 from .interface import RobotState
 from .packet import LATE, STOPPED, seq_diff, seq_wrap
 
-#: How velocities are measured.
-VELOCITY_MODES = ("measured", "difference")
 #: Default robot-side watchdog [s].
 WATCHDOG_TIMEOUT = 0.020
 

@@ -163,16 +163,7 @@ def plot_gains(result: Run) -> Figure:
         if series.size and np.isfinite(series).any():
             ax.plot(result.t, series, lw=1.0, color=_GAIN_COLORS[k % len(_GAIN_COLORS)])
             final = float(series[np.isfinite(series)][-1])
-            ax.annotate(
-                f"final {final:.4g} {unit}",
-                xy=(1.0, 1.0),
-                xycoords="axes fraction",
-                xytext=(-4, -4),
-                textcoords="offset points",
-                ha="right",
-                va="top",
-                fontsize="small",
-            )
+            _corner_note(ax, f"final {final:.4g} {unit}")
         ax.set_ylabel(f"{label} [{unit}]" if unit else label)
         ax.ticklabel_format(axis="y", useOffset=False)  # 2.0008, not "+2" and 0.0008
         ax.grid(True, alpha=0.3)
@@ -337,16 +328,10 @@ def _margin_axes(axes: Axes, result: Run) -> None:
     axes.axvspan(start, t[-1], color="tab:orange", alpha=0.15, lw=0)
     worst = float(final.max())
     margin = 1.0 - worst
-    axes.annotate(
+    _corner_note(
+        axes,
         f"final max {worst:.4g} $\\varepsilon$ over {describe_final_window(span)}: "
         + (f"margin {100 * margin:.3g} % of $\\varepsilon$" if margin > 0 else "ABOVE epsilon"),
-        xy=(1.0, 1.0),
-        xycoords="axes fraction",
-        xytext=(-4, -4),
-        textcoords="offset points",
-        ha="right",
-        va="top",
-        fontsize="small",
         bbox={"boxstyle": "round", "fc": "white", "ec": "0.7", "alpha": 0.9},
     )
     finite = ratio[np.isfinite(ratio)]
@@ -354,6 +339,22 @@ def _margin_axes(axes: Axes, result: Run) -> None:
     axes.set_ylim(0.0, max(1.5, 1.25 * worst) if finite.size else 1.5)
     axes.set(xlabel="time [s]", ylabel="$\\|e\\| / \\varepsilon$")
     axes.grid(True, alpha=0.3)
+
+
+def _corner_note(axes: Axes, text: str, **style) -> None:
+    """``text`` in small print inside the top right corner of ``axes`` (``style``: more
+    :meth:`~matplotlib.axes.Axes.annotate` options, e.g. a ``bbox``)."""
+    axes.annotate(
+        text,
+        xy=(1.0, 1.0),
+        xycoords="axes fraction",
+        xytext=(-4, -4),
+        textcoords="offset points",
+        ha="right",
+        va="top",
+        fontsize="small",
+        **style,
+    )
 
 
 def _torque_units(result: Run) -> list[str]:

@@ -51,7 +51,13 @@ from ..control.base import Controller, actuation_delay_of
 from ..errors import InputError
 from ..model.robot import Robot
 from ..trajectories import Trajectory
-from ..validation import check_run_length, check_trajectory_dof, finite_vector, positive_number
+from ..validation import (
+    check_run_length,
+    check_trajectory_dof,
+    check_type,
+    finite_vector,
+    positive_number,
+)
 from .closed_loop import RunSetup
 from .continuous import (  # noqa: F401 (the defaults, read here by older code)
     CONTINUOUS_ATOL,
@@ -268,18 +274,13 @@ def simulate(
 def _check_parts(plant: Any, controller: Any, trajectory: Any) -> None:
     """Typed errors naming the argument when a plant, controller or trajectory is of the wrong
     type or size (a box given as the controller, a 2-joint trajectory for a 6-joint arm)."""
-    if not isinstance(plant, Robot):
-        raise InputError(
-            f"expected a Robot (urpc.load_robot(...) or box.plant(robot, point)), got "
-            f"{type(plant).__name__}",
-            field="plant",
-        )
-    if not isinstance(controller, Controller):
-        raise InputError(
-            "expected a controller (urpc.synthesize(robot, box, epsilon=...) or another "
-            f"urpc.control.Controller), got {type(controller).__name__}",
-            field="controller",
-        )
+    check_type("plant", plant, Robot, "a Robot (urpc.load_robot(...) or box.plant(robot, point))")
+    check_type(
+        "controller",
+        controller,
+        Controller,
+        "a controller (urpc.synthesize(robot, box, epsilon=...) or another urpc.control.Controller)",
+    )
     check_trajectory_dof(trajectory, plant.dof, f"the plant {plant.name!r}")
     if controller.dof is not None and controller.dof != plant.dof:
         raise InputError(

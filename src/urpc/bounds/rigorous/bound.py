@@ -240,32 +240,14 @@ class RigorousBound(BoundMethod):
                 W_ang = add(W_ang, scale(qd_a[i], axis))
                 A_ang = add(A_ang, scale(qdd_a[i], axis))
                 # (V x S qd_a_i + W x S qd_i) / 2 with S = (0, axis).
-                A_lin = add(
-                    A_lin,
-                    add(
-                        scale(HALF * qd_a[i], cross(V_lin, axis)),
-                        scale(HALF * qd[i], cross(W_lin, axis)),
-                    ),
-                )
-                A_ang = add(
-                    A_ang,
-                    add(
-                        scale(HALF * qd_a[i], cross(V_ang, axis)),
-                        scale(HALF * qd[i], cross(W_ang, axis)),
-                    ),
-                )
+                A_lin = add(A_lin, _half_cross_sum(qd_a[i], V_lin, qd[i], W_lin, axis))
+                A_ang = add(A_ang, _half_cross_sum(qd_a[i], V_ang, qd[i], W_ang, axis))
             else:
                 V_lin = add(V_lin, scale(qd[i], axis))
                 W_lin = add(W_lin, scale(qd_a[i], axis))
                 A_lin = add(A_lin, scale(qdd_a[i], axis))
                 # S = (axis, 0): V x S x = (omega x axis x, 0).
-                A_lin = add(
-                    A_lin,
-                    add(
-                        scale(HALF * qd_a[i], cross(V_ang, axis)),
-                        scale(HALF * qd[i], cross(W_ang, axis)),
-                    ),
-                )
+                A_lin = add(A_lin, _half_cross_sum(qd_a[i], V_ang, qd[i], W_ang, axis))
             motions.append(((V_lin, V_ang), (W_lin, W_ang), (A_lin, A_ang)))
         return poses, motions
 
@@ -287,6 +269,11 @@ class RigorousBound(BoundMethod):
                 parent = total[joint.parent]
                 total[joint.parent] = moved if parent is None else add_force(parent, moved)
         return tau
+
+
+def _half_cross_sum(a: arb, V: Vec, b: arb, W: Vec, axis: Vec) -> Vec:
+    """``(a V x axis + b W x axis) / 2``: a joint's term of the symmetrized acceleration."""
+    return add(scale(HALF * a, cross(V, axis)), scale(HALF * b, cross(W, axis)))
 
 
 def joint_balls(joints: JointBox, qd: np.ndarray, qd_a: np.ndarray, qdd_a: np.ndarray) -> list[arb]:
