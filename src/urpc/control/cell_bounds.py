@@ -1,14 +1,7 @@
-"""Bounds over one cell of the certificate (:mod:`urpc.control.cells`): inertia models from a
-centered form, the norms a link's mismatch enters the floor with, the Coriolis matrix of every
-plant of the box as a centered form, and the parameter box of each link.
-
-From the enclosure of a symmetric matrix over a box of ``q`` (its value at the centre, ``M_c = L
-L^T``, and its derivatives over the box) :func:`inertia_model` gives ``(1 - eps) M_c <= M(q) <=
-(1 + eps) M_c``, from which every eigenvalue, generalized eigenvalue, trace and norm the argument
-uses follows with one factorization of the centre matrix; ``M^-1 x = M_c^-1 x + L^-T ((1 + F)^-1 -
-1) L^-1 x`` with ``||F|| <= eps`` bounds the inverse applied to a vector. LAPACK's rounding on the
-centre matrices (backward errors of order ``n u cond``) is covered by the relative margin
-:data:`LAPACK_MARGIN` on each such figure.
+"""Bounds over one cell of the certificate (:mod:`urpc.control.cells`): the norms a link's
+mismatch enters the floor with, the Coriolis matrix of every plant of the box as a centered form,
+and the parameter box of each link. The inertia models they go through are
+:mod:`urpc.control.cell_inertia`.
 """
 
 from __future__ import annotations
@@ -21,119 +14,7 @@ from ..bounds.base import link_body_placement
 from ..bounds.hull import barycentric_enclosure
 from ..model.regressor_balls import Ball, BallRegressor, parameters_of
 from ..model.uncertainty import ParameterBox
-
-#: Relative margin on every eigenvalue and norm computed by LAPACK from a cell's centre matrices.
-LAPACK_MARGIN = 1e-9
-
-
-@dataclasses.dataclass
-class InertiaModel:
-    """Per cell, a symmetric matrix model's centre ``M_c``, its Cholesky inverse ``P = L^-1`` and
-    the relative radius ``eps``."""
-
-    center: np.ndarray  # (cells, n, n)
-    inverse_factor: np.ndarray  # P = L^-1, (cells, n, n)
-    eps: np.ndarray  # (cells,)
-    lam_min: np.ndarray  # lambda_min(M_c), (cells,)
-    lam_max: np.ndarray  # lambda_max(M_c), (cells,)
-    valid: np.ndarray  # M_c positive definite and eps < 1, (cells,)
-
-    @property
-    def inverse(self) -> np.ndarray:
-        P = self.inverse_factor
-        return np.swapaxes(P, -1, -2) @ P
-
-    def kappa(self) -> np.ndarray:
-        """``||M^-1 x - M_c^-1 x|| <= kappa ||L^-1 x||`` over the enclosure."""
-        eps = np.minimum(self.eps, 0.999999)
-        return eps / (1 - eps) / np.sqrt(np.maximum(self.lam_min, 1e-300))
-
-
-def inertia_model(
-    center: Ball,
-    slopes: Ball,
-    radii: np.ndarray,
-    ball: float,
-    remainder: np.ndarray,
-    slope_spread: np.ndarray,
-) -> tuple[InertiaModel, np.ndarray]:
-    """The model of a symmetric matrix over the states ``q = q_c + x + e`` with ``|x_k| <= r_k``
-    and ``||e||_2 <= ball`` (a cell of the reference and the tube around it), from its value at
-    the centre (``center``, a ball of rounding width), its partial derivatives at the centre
-    (``slopes``: (cells, k, n, n), ``D_k = dM/dq_k(q_c)``, a ball of rounding width) and bounds of
-    its second derivatives over the region (:func:`taylor_terms`). By Taylor's theorem with the
-    Lagrange remainder, ``M(q) - M_c = sum_k dq_k D_k + Z(dq)`` with ``|Z| <= remainder``
-    entrywise, so that with ``P = L^-1``
-
-        ||P (M(q) - M_c) P^T|| <= || |P| R_c |P|^T || + sum_k r_k s_k + ball ||s||_2
-                                  + || |P| remainder |P|^T ||,
-        s_k = ||P D_k P^T||_2 + || |P| rad(D_k) |P|^T ||_2
-
-    (``sum_k |e_k| s_k <= ||e||_2 ||s||_2``: the tube is a ball, which its bounding box would
-    over-state by up to ``sqrt(n)``). The first-order part keeps the structure of each
-    derivative (an entrywise bound loses it through ``|P|`` where the lightest mode couples the
-    joints); only the second-order part goes through ``|P|``. Over the region ``dM/dq_k`` differs
-    from ``D_k`` by at most ``slope_spread`` (cells, k, n, n) entrywise, so the slopes returned
-    for rates ``dM/dt = sum_k qd_k dM/dq_k`` are ``(s_k + || |P| spread_k |P|^T ||) /
-    lambda_min(P M_c P^T)`` per cell (cells, k)."""
-    mid = center.mid
-    eigenvalues = np.linalg.eigvalsh(mid)
-    lam_min, lam_max = eigenvalues[..., 0], eigenvalues[..., -1]
-    positive = lam_min > 1e-12 * np.maximum(lam_max, 1e-300)
-    safe = np.where(positive[..., None, None], mid, np.eye(mid.shape[-1]))
-    L = np.linalg.cholesky(safe)
-    identity = np.broadcast_to(np.eye(mid.shape[-1]), mid.shape)
-    P = np.linalg.solve(L, identity)  # L^-1, batched
-    Pt = np.swapaxes(P, -1, -2)
-    floor = np.linalg.eigvalsh(P @ safe @ Pt)[..., 0]
-    absolute, absolute_t = np.abs(P), np.abs(Pt)
-    Pk, Pkt = P[:, None], Pt[:, None]
-    first = spectral_norm(Pk @ slopes.mid @ Pkt) + spectral_norm(
-        absolute[:, None] @ slopes.rad @ absolute_t[:, None]
-    )
-    first = first * (1 + LAPACK_MARGIN)
-    spread = (
-        spectral_norm(absolute @ center.rad @ absolute_t)
-        + np.sum(radii * first, axis=-1)
-        + ball * np.sqrt(np.sum(first * first, axis=-1))
-        + spectral_norm(absolute @ remainder @ absolute_t)
-    )
-    eps = spread / floor * (1 + LAPACK_MARGIN) + LAPACK_MARGIN
-    model = InertiaModel(mid, P, eps, lam_min, lam_max, positive & (eps < 1))
-    rates = first + spectral_norm(absolute[:, None] @ slope_spread @ absolute_t[:, None])
-    return model, rates * (1 + LAPACK_MARGIN) / floor[:, None]
-
-
-def taylor_terms(
-    curvatures: Ball, group: np.ndarray, widths: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Entrywise bounds of the second-order terms of :func:`inertia_model` per cell: with
-    ``|H_kj| <= |mid| + rad`` the second derivatives over a box that holds the cell's region
-    (``curvatures``: (groups, k, j, models, n, n), cell ``c`` in box ``group[c]``) and ``|dq_k| <=
-    w_k`` (``widths``: (cells, k)), the Lagrange remainder ``1/2 sum_kj |dq_k| |dq_j| |H_kj|``
-    (cells, models, n, n) and the change of each first derivative over the region, ``sum_j w_j
-    |H_kj|`` (cells, k, models, n, n)."""
-    magnitude = (np.abs(curvatures.mid) + curvatures.rad) * (1 + 1e-12)
-    w = widths * (1 + 1e-12)
-    cells, (n, _, models, rows, columns) = len(group), magnitude.shape[1:]
-    spread = np.empty((cells, n, models, rows, columns))
-    for box in np.unique(group):
-        members = np.flatnonzero(group == box)
-        spread[members] = np.einsum("cj,kjmab->ckmab", w[members], magnitude[box])
-    remainder = 0.5 * np.einsum("ck,ckmab->cmab", w, spread)
-    return remainder * (1 + 1e-12), spread * (1 + 1e-12)
-
-
-def spectral_norm(X: np.ndarray) -> np.ndarray:
-    """Spectral norm of each matrix of a batch (symmetric or not): the square root of the largest
-    eigenvalue of its Gram matrix ``X^T X`` (or ``X X^T``, the smaller), half the cost of an SVD.
-    Forming the Gram matrix in floating point moves that eigenvalue by at most ``n^2 u ||X||^2``
-    (``n`` the larger dimension), far inside the callers' relative margin
-    :data:`LAPACK_MARGIN`."""
-    rows, columns = X.shape[-2:]
-    Xt = np.swapaxes(X, -1, -2)
-    gram = Xt @ X if rows >= columns else X @ Xt
-    return np.sqrt(np.maximum(np.linalg.eigvalsh(gram)[..., -1], 0.0))
+from .cell_inertia import LAPACK_MARGIN, InertiaModel, safe_cholesky, spectral_norm
 
 
 def column_norm(x: np.ndarray, axis=-2) -> np.ndarray:
@@ -228,7 +109,7 @@ class CenteredCoriolis:
         pi_c)``, in one call, and ``C(q; v_c, .)`` of every centre and direction in one call per
         distinct ``v_c`` (each row is computed as it would be alone, up to the order of
         rounding)."""
-        free = np.flatnonzero(np.any([parameters.rad > 0 for _, parameters in forms], axis=0))
+        free = free_directions([parameters for _, parameters in forms])
         size = forms[0][1].mid.shape[0]
         directions = np.zeros((len(free), size))
         directions[np.arange(len(free)), free] = 1.0
@@ -309,8 +190,7 @@ def coriolis_coefficients(
     chunks of cells so that memory stays bounded whatever the arm (every cell's enclosure is
     independent of the others'): ``out[form] = (A, B)``."""
     cells, n = q.mid.shape
-    free = np.count_nonzero(np.any([parameters.rad > 0 for _, parameters, _ in forms], axis=0))
-    rows = len(forms) + int(free)
+    rows = len(forms) + len(free_directions([parameters for _, parameters, _ in forms]))
     per_cell = n * (n + 1) // 2 * rows * n * 3 * 8 * 4  # the backward pass's force rows
     chunk = max(1, int(CORIOLIS_CHUNK_BYTES // max(per_cell, 1)))
     parts: list[list[tuple[np.ndarray, np.ndarray]]] = []
@@ -324,6 +204,11 @@ def coriolis_coefficients(
     return [
         tuple(np.concatenate([p[f][i] for p in parts]) for i in range(2)) for f in range(len(forms))
     ]
+
+
+def free_directions(boxes: list[Ball]) -> np.ndarray:
+    """The parameters with a non-zero radius in any of the boxes (their indices)."""
+    return np.flatnonzero(np.any([box.rad > 0 for box in boxes], axis=0))
 
 
 def velocity_bound(
@@ -344,16 +229,6 @@ def velocity_bound(
         norm * np.sqrt(np.sum((per_velocity * weights) ** 2, axis=-1)),
     )
     return (constant + np.sum(per_velocity * box, axis=-1) + ball) * (1 + 1e-12)
-
-
-def congruence(P: np.ndarray, A: np.ndarray) -> np.ndarray:
-    """``P A P^T`` per cell."""
-    return P @ A @ np.swapaxes(P, -1, -2)
-
-
-def safe_cholesky(center: np.ndarray, valid: np.ndarray) -> np.ndarray:
-    safe = np.where(valid[..., None, None], center, np.eye(center.shape[-1]))
-    return np.linalg.cholesky(safe)
 
 
 def plant_hull(robot, box: ParameterBox) -> Ball:

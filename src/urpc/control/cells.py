@@ -26,17 +26,13 @@ from ..model.regressor_balls import Ball, BallRegressor, Jet, matvec, parameters
 from ..trajectories import Trajectory, covered_span
 from .box_pieces import split_box
 from .cell_bounds import (
-    LAPACK_MARGIN,
-    InertiaModel,
     MismatchNorms,
-    congruence,
     coriolis_coefficients,
-    inertia_model,
     link_parameters,
     plant_hull,
-    taylor_terms,
     velocity_bound,
 )
+from .cell_inertia import LAPACK_MARGIN, InertiaModel, congruence, inertia_models
 from .interval import IntervalPassivityController
 from .sampled_joints import JointTerms
 
@@ -44,11 +40,6 @@ from .sampled_joints import JointTerms
 CELL_MOTION = 0.01
 #: Bounds on the number of cells.
 MIN_CELLS, MAX_CELLS = 16, 4000
-#: The inertia models' second derivatives are enclosed over boxes of at least this many
-#: consecutive cells (more on long chains, :meth:`CellFloor._inertia_models`).
-CURVATURE_CELLS = 4
-#: ... at most this many bytes of their recursion at a time.
-CURVATURE_CHUNK_BYTES = 2**28
 
 
 class CellFloor:
@@ -351,47 +342,10 @@ class CellFloor:
         self, q: Ball, reference_radii: np.ndarray, tube: float
     ) -> tuple[list[InertiaModel], list[np.ndarray]]:
         """Every inertia model (nominal, the law's ``M_L``, each piece's ``M_L`` and ``M_U``) over
-        the cells of the reference (half-widths ``reference_radii``) and the tube ``||e|| <=
-        tube`` around them, ``q`` a box that holds both: its value at each cell's centre and its
-        derivatives in ``q`` over the whole box (:func:`inertia_model`), with the slopes ``s_k``
-        for its rates."""
-        n, cells = self.dof, q.mid.shape[0]
-        centers = self.regressor.mass_matrices(Ball.point(q.mid), self._parameters)
-        diagonal = np.einsum("pi,ij->pij", self._armature, np.eye(n))
-        centers = Ball(centers.mid + diagonal, centers.rad)  # (cells, P, n, n)
-        along = Jet(
-            Ball.point(np.broadcast_to(q.mid[:, None, :], (cells, n, n))),
-            Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
+        the cells (:func:`~urpc.control.cell_inertia.inertia_models`)."""
+        return inertia_models(
+            self.regressor, self._parameters, self._armature, q, reference_radii, tube
         )
-        slopes = self.regressor.mass_matrices(along, self._parameters).dot  # (cells, k, P, n, n)
-        # Second derivatives over boxes of consecutive cells (each the hull of its cells' boxes,
-        # tube included): a second-order term, so a coarser box costs little. At least
-        # CURVATURE_CELLS, and (n + 1) / 2 on longer chains: their n (n + 1) / 2 pairs then cost
-        # what the n first derivatives do, so the cost keeps growing as n^3.
-        size = max(1, min(max(CURVATURE_CELLS, math.ceil((n + 1) / 2)), cells))
-        group = np.arange(cells) // size
-        starts = np.arange(0, cells, size)
-        lower = np.minimum.reduceat(q.mid - q.rad, starts, axis=0)
-        upper = np.maximum.reduceat(q.mid + q.rad, starts, axis=0)
-        boxes = Ball.hull(lower, upper)
-        per_box = n * (n + 1) // 2 * n * len(self._parameters) * 3 * 8 * 8
-        chunk = max(1, int(CURVATURE_CHUNK_BYTES // max(per_box, 1)))
-        parts = [
-            self.regressor.mass_matrix_curvatures(boxes[start : start + chunk], self._parameters)
-            for start in range(0, len(starts), chunk)
-        ]
-        curvatures = Ball(
-            np.concatenate([p.mid for p in parts]), np.concatenate([p.rad for p in parts])
-        )
-        remainder, spread = taylor_terms(curvatures, group, reference_radii + tube)
-        pairs = [
-            inertia_model(
-                centers[:, index], slopes[:, :, index], reference_radii, tube,
-                remainder[:, index], spread[:, :, index],
-            )
-            for index in range(len(self._parameters))
-        ]  # fmt: skip
-        return [model for model, _ in pairs], [slope for _, slope in pairs]
 
     def _mismatch_parts(self, tube: float, extension: float):
         """``Y_SL`` over each cell of the reference at ``e = 0`` (a ball), and its Jacobian along

@@ -1,0 +1,202 @@
+"""The inertia models of one cell of the certificate (:mod:`urpc.control.cells`): a symmetric
+matrix (``M0``, the law's ``M_L``, each piece's ``M_L`` and ``M_U``) bounded over a cell of the
+reference and the tube around it by a Taylor form.
+
+From the matrix at the cell's centre (``M_c = L L^T``), its first derivatives there and its
+second derivatives over a box that holds the cell, :func:`inertia_model` gives ``(1 - eps) M_c <=
+M(q) <= (1 + eps) M_c``, from which every eigenvalue, generalized eigenvalue, trace and norm the
+argument uses follows with one factorization of the centre matrix; ``M^-1 x = M_c^-1 x + L^-T ((1
++ F)^-1 - 1) L^-1 x`` with ``||F|| <= eps`` bounds the inverse applied to a vector. LAPACK's
+rounding on the centre matrices (backward errors of order ``n u cond``) is covered by the relative
+margin :data:`LAPACK_MARGIN` on each such figure.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..model.regressor_balls import Ball, BallRegressor, Jet
+
+#: Relative margin on every eigenvalue and norm computed by LAPACK from a cell's centre matrices.
+LAPACK_MARGIN = 1e-9
+
+
+#: The second derivatives are enclosed over boxes of at least this many consecutive cells (more
+#: on long chains, :func:`inertia_models`).
+CURVATURE_CELLS = 4
+#: ... at most this many bytes of their recursion at a time.
+CURVATURE_CHUNK_BYTES = 2**28
+
+
+@dataclasses.dataclass
+class InertiaModel:
+    """Per cell, a symmetric matrix model's centre ``M_c``, its Cholesky inverse ``P = L^-1`` and
+    the relative radius ``eps``."""
+
+    center: np.ndarray  # (cells, n, n)
+    inverse_factor: np.ndarray  # P = L^-1, (cells, n, n)
+    eps: np.ndarray  # (cells,)
+    lam_min: np.ndarray  # lambda_min(M_c), (cells,)
+    lam_max: np.ndarray  # lambda_max(M_c), (cells,)
+    valid: np.ndarray  # M_c positive definite and eps < 1, (cells,)
+
+    @property
+    def inverse(self) -> np.ndarray:
+        P = self.inverse_factor
+        return np.swapaxes(P, -1, -2) @ P
+
+    def kappa(self) -> np.ndarray:
+        """``||M^-1 x - M_c^-1 x|| <= kappa ||L^-1 x||`` over the enclosure."""
+        eps = np.minimum(self.eps, 0.999999)
+        return eps / (1 - eps) / np.sqrt(np.maximum(self.lam_min, 1e-300))
+
+
+def inertia_model(
+    center: Ball,
+    slopes: Ball,
+    radii: np.ndarray,
+    ball: float,
+    remainder: np.ndarray,
+    slope_spread: np.ndarray,
+) -> tuple[InertiaModel, np.ndarray]:
+    """The model of a symmetric matrix over the states ``q = q_c + x + e`` with ``|x_k| <= r_k``
+    and ``||e||_2 <= ball`` (a cell of the reference and the tube around it), from its value at
+    the centre (``center``, a ball of rounding width), its partial derivatives at the centre
+    (``slopes``: (cells, k, n, n), ``D_k = dM/dq_k(q_c)``, a ball of rounding width) and bounds of
+    its second derivatives over the region (:func:`taylor_terms`). By Taylor's theorem with the
+    Lagrange remainder, ``M(q) - M_c = sum_k dq_k D_k + Z(dq)`` with ``|Z| <= remainder``
+    entrywise, so that with ``P = L^-1``
+
+        ||P (M(q) - M_c) P^T|| <= || |P| R_c |P|^T || + sum_k r_k s_k + ball ||s||_2
+                                  + || |P| remainder |P|^T ||,
+        s_k = ||P D_k P^T||_2 + || |P| rad(D_k) |P|^T ||_2
+
+    (``sum_k |e_k| s_k <= ||e||_2 ||s||_2``: the tube is a ball, which its bounding box would
+    over-state by up to ``sqrt(n)``). The first-order part keeps the structure of each
+    derivative (an entrywise bound loses it through ``|P|`` where the lightest mode couples the
+    joints); only the second-order part goes through ``|P|``. Over the region ``dM/dq_k`` differs
+    from ``D_k`` by at most ``slope_spread`` (cells, k, n, n) entrywise, so the slopes returned
+    for rates ``dM/dt = sum_k qd_k dM/dq_k`` are ``(s_k + || |P| spread_k |P|^T ||) /
+    lambda_min(P M_c P^T)`` per cell (cells, k)."""
+    mid = center.mid
+    eigenvalues = np.linalg.eigvalsh(mid)
+    lam_min, lam_max = eigenvalues[..., 0], eigenvalues[..., -1]
+    positive = lam_min > 1e-12 * np.maximum(lam_max, 1e-300)
+    safe = np.where(positive[..., None, None], mid, np.eye(mid.shape[-1]))
+    L = np.linalg.cholesky(safe)
+    identity = np.broadcast_to(np.eye(mid.shape[-1]), mid.shape)
+    P = np.linalg.solve(L, identity)  # L^-1, batched
+    Pt = np.swapaxes(P, -1, -2)
+    floor = np.linalg.eigvalsh(P @ safe @ Pt)[..., 0]
+    absolute, absolute_t = np.abs(P), np.abs(Pt)
+    Pk, Pkt = P[:, None], Pt[:, None]
+    first = spectral_norm(Pk @ slopes.mid @ Pkt) + spectral_norm(
+        absolute[:, None] @ slopes.rad @ absolute_t[:, None]
+    )
+    first = first * (1 + LAPACK_MARGIN)
+    spread = (
+        spectral_norm(absolute @ center.rad @ absolute_t)
+        + np.sum(radii * first, axis=-1)
+        + ball * np.sqrt(np.sum(first * first, axis=-1))
+        + spectral_norm(absolute @ remainder @ absolute_t)
+    )
+    eps = spread / floor * (1 + LAPACK_MARGIN) + LAPACK_MARGIN
+    model = InertiaModel(mid, P, eps, lam_min, lam_max, positive & (eps < 1))
+    rates = first + spectral_norm(absolute[:, None] @ slope_spread @ absolute_t[:, None])
+    return model, rates * (1 + LAPACK_MARGIN) / floor[:, None]
+
+
+def taylor_terms(
+    curvatures: Ball, group: np.ndarray, widths: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Entrywise bounds of the second-order terms of :func:`inertia_model` per cell: with
+    ``|H_kj| <= |mid| + rad`` the second derivatives over a box that holds the cell's region
+    (``curvatures``: (groups, k, j, models, n, n), cell ``c`` in box ``group[c]``) and ``|dq_k| <=
+    w_k`` (``widths``: (cells, k)), the Lagrange remainder ``1/2 sum_kj |dq_k| |dq_j| |H_kj|``
+    (cells, models, n, n) and the change of each first derivative over the region, ``sum_j w_j
+    |H_kj|`` (cells, k, models, n, n)."""
+    magnitude = (np.abs(curvatures.mid) + curvatures.rad) * (1 + 1e-12)
+    w = widths * (1 + 1e-12)
+    cells, (n, _, models, rows, columns) = len(group), magnitude.shape[1:]
+    spread = np.empty((cells, n, models, rows, columns))
+    for box in np.unique(group):
+        members = np.flatnonzero(group == box)
+        spread[members] = np.einsum("cj,kjmab->ckmab", w[members], magnitude[box])
+    remainder = 0.5 * np.einsum("ck,ckmab->cmab", w, spread)
+    return remainder * (1 + 1e-12), spread * (1 + 1e-12)
+
+
+def spectral_norm(X: np.ndarray) -> np.ndarray:
+    """Spectral norm of each matrix of a batch (symmetric or not): the square root of the largest
+    eigenvalue of its Gram matrix ``X^T X`` (or ``X X^T``, the smaller), half the cost of an SVD.
+    Forming the Gram matrix in floating point moves that eigenvalue by at most ``n^2 u ||X||^2``
+    (``n`` the larger dimension), far inside the callers' relative margin
+    :data:`LAPACK_MARGIN`."""
+    rows, columns = X.shape[-2:]
+    Xt = np.swapaxes(X, -1, -2)
+    gram = Xt @ X if rows >= columns else X @ Xt
+    return np.sqrt(np.maximum(np.linalg.eigvalsh(gram)[..., -1], 0.0))
+
+
+def congruence(P: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """``P A P^T`` per cell."""
+    return P @ A @ np.swapaxes(P, -1, -2)
+
+
+def safe_cholesky(center: np.ndarray, valid: np.ndarray) -> np.ndarray:
+    safe = np.where(valid[..., None, None], center, np.eye(center.shape[-1]))
+    return np.linalg.cholesky(safe)
+
+
+def inertia_models(
+    regressor: BallRegressor,
+    parameters: np.ndarray,
+    armature: np.ndarray,
+    q: Ball,
+    reference_radii: np.ndarray,
+    tube: float,
+) -> tuple[list[InertiaModel], list[np.ndarray]]:
+    """The inertia model of each model copy (rows of ``parameters``, standard parameters of
+    its bodies, and of ``armature``) over the cells of the reference (half-widths
+    ``reference_radii``) and the tube ``||e|| <= tube`` around them, ``q`` a box that holds
+    both (:func:`inertia_model`), with the slopes ``s_k`` for its rates."""
+    cells, n = q.mid.shape
+    centers = regressor.mass_matrices(Ball.point(q.mid), parameters)
+    diagonal = np.einsum("pi,ij->pij", armature, np.eye(n))
+    centers = Ball(centers.mid + diagonal, centers.rad)  # (cells, P, n, n)
+    along = Jet(
+        Ball.point(np.broadcast_to(q.mid[:, None, :], (cells, n, n))),
+        Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
+    )
+    slopes = regressor.mass_matrices(along, parameters).dot  # (cells, k, P, n, n)
+    # Second derivatives over boxes of consecutive cells (each the hull of its cells' boxes,
+    # tube included): a second-order term, so a coarser box costs little. At least
+    # CURVATURE_CELLS, and (n + 1) / 2 on longer chains: their n (n + 1) / 2 pairs then cost
+    # what the n first derivatives do, so the cost keeps growing as n^3.
+    size = max(1, min(max(CURVATURE_CELLS, math.ceil((n + 1) / 2)), cells))
+    group = np.arange(cells) // size
+    starts = np.arange(0, cells, size)
+    lower = np.minimum.reduceat(q.mid - q.rad, starts, axis=0)
+    upper = np.maximum.reduceat(q.mid + q.rad, starts, axis=0)
+    boxes = Ball.hull(lower, upper)
+    per_box = n * (n + 1) // 2 * n * len(parameters) * 3 * 8 * 8
+    chunk = max(1, int(CURVATURE_CHUNK_BYTES // max(per_box, 1)))
+    parts = [
+        regressor.mass_matrix_curvatures(boxes[start : start + chunk], parameters)
+        for start in range(0, len(starts), chunk)
+    ]
+    curvatures = Ball(
+        np.concatenate([p.mid for p in parts]), np.concatenate([p.rad for p in parts])
+    )
+    remainder, spread = taylor_terms(curvatures, group, reference_radii + tube)
+    pairs = [
+        inertia_model(
+            centers[:, index], slopes[:, :, index], reference_radii, tube,
+            remainder[:, index], spread[:, :, index],
+        )
+        for index in range(len(parameters))
+    ]  # fmt: skip
+    return [model for model, _ in pairs], [slope for _, slope in pairs]
