@@ -53,9 +53,10 @@ def _christoffel(robot, q, v, h=1e-6):
 
 def _inside(piece, point) -> bool:
     return all(
-        np.all(point[b.link] >= b.lower - 1e-12) and np.all(point[b.link] <= b.upper + 1e-12)
+        np.all(point.links[b.link] >= b.lower - 1e-12)
+        and np.all(point.links[b.link] <= b.upper + 1e-12)
         for b in piece.links
-        if b.link in point
+        if b.link in point.links
     )
 
 
@@ -72,14 +73,16 @@ def test_the_coriolis_bounds_hold_pinocchio_in_the_lower_metric(arm):
     controller = urpc.synthesize(robot, box, 1e-2, sample_period=T)
     trajectory = generic_trajectory(box.nominal_robot(robot))
     floor_of = CellFloor(controller, trajectory, 1.0, cells=16)
+    rng = np.random.default_rng(3)
+    floor_of.refine(rng.choice(16, 6, replace=False))  # halves among whole cells
     quantities = floor_of.quantities(tube, r_max, 2 * T)
+    starts, ends = floor_of.spans()
     lowers = [InertiaBounds(robot, piece).lower_robot for piece in floor_of.pieces]
     nominal, Kr = controller.robot, controller.Kr
-    rng = np.random.default_rng(3)
     checked = 0
     for _ in range(40):
         cell = int(rng.integers(floor_of.cells))
-        t = rng.uniform(floor_of.edges[cell], floor_of.edges[cell + 1] + 2 * T)
+        t = rng.uniform(starts[cell], ends[cell] + 2 * T)
         e = rng.standard_normal(robot.dof)
         e *= tube * rng.uniform(0, 1) ** 0.2 / np.linalg.norm(e)
         r = rng.standard_normal(robot.dof)
@@ -123,19 +126,22 @@ def test_the_inertia_models_hold_pinocchio_over_the_cells_and_the_tube(arm):
     T, tube = 1e-3, 1e-2
     controller = urpc.synthesize(robot, box, 1e-2, sample_period=T)
     trajectory = generic_trajectory(box.nominal_robot(robot))
-    floor_of = CellFloor(controller, trajectory, 1.0, cells=40)
-    q = floor_of._states(tube, 0.0, 2 * T)[0].val
-    reference_radii = floor_of._states(0.0, 0.0, 2 * T)[0].val.rad
-    models, rates = floor_of._inertia_models(q, reference_radii, tube)
+    floor_of = CellFloor(controller, trajectory, 1.0, cells=20)
+    rng = np.random.default_rng(11)
+    floor_of.refine(np.arange(20))  # the halves: second derivatives over their first cells
+    floor_of.refine(rng.choice(40, 20, replace=False))
+    batch = floor_of._batches[-1]  # quarters of first cells
+    q = floor_of._states(batch, tube, 0.0, 2 * T)[0].val
+    reference_radii = floor_of._states(batch, 0.0, 0.0, 2 * T)[0].val.rad
+    models, rates = floor_of._inertia_models(batch, q, reference_radii, tube, 2 * T)
     plants = [
         (controller.robot, models[0], None),
         (controller.inertia_bounds.lower_robot, models[1], rates[1]),
     ]
-    rng = np.random.default_rng(11)
     h, checked = 1e-6, 0
     for _ in range(60):
-        cell = int(rng.integers(floor_of.cells))
-        t = rng.uniform(floor_of.edges[cell], floor_of.edges[cell + 1] + 2 * T)
+        cell = int(rng.integers(len(batch)))
+        t = rng.uniform(batch.start[cell], batch.end[cell] + 2 * T)
         e = rng.standard_normal(robot.dof)
         e *= tube * rng.uniform(0, 1) ** 0.1 / np.linalg.norm(e)
         x = trajectory.reference(t).q - e

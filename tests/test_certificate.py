@@ -53,12 +53,16 @@ def _check_cells_hold_points(robot, box, controller, trajectory, duration, tube,
     """Pinocchio at random (t, e, plant) against the cell that holds t."""
     floor_of = CellFloor(controller, trajectory, duration, cells=24)
     T = controller.sample_period
+    # Split random cells twice (halves reuse their first cell's second derivatives of M).
+    for _ in range(2):
+        floor_of.refine(rng.choice(floor_of.cells, floor_of.cells // 3, replace=False))
     quantities = floor_of.quantities(tube, 0.1, 2 * T)
+    starts, ends = floor_of.spans()
     law = controller.inertia_bounds.lower_robot
     Kr = controller.Kr
     for _ in range(draws):
         cell = int(rng.integers(floor_of.cells))
-        t = rng.uniform(floor_of.edges[cell], floor_of.edges[cell + 1] + 2 * T)
+        t = rng.uniform(starts[cell], ends[cell] + 2 * T)
         direction = rng.standard_normal(robot.dof)
         e = direction / np.linalg.norm(direction) * tube * rng.uniform(0, 1) ** 0.3
         reference = trajectory.reference(t)

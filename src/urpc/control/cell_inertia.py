@@ -14,7 +14,6 @@ margin :data:`LAPACK_MARGIN` on each such figure.
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 
@@ -24,10 +23,7 @@ from ..model.regressor_balls import Ball, BallRegressor, Jet
 LAPACK_MARGIN = 1e-9
 
 
-#: The second derivatives are enclosed over boxes of at least this many consecutive cells (more
-#: on long chains, :func:`inertia_models`).
-CURVATURE_CELLS = 4
-#: ... at most this many bytes of their recursion at a time.
+#: The second derivatives are enclosed over at most this many bytes of their recursion at a time.
 CURVATURE_CHUNK_BYTES = 2**28
 
 
@@ -151,6 +147,20 @@ def safe_cholesky(center: np.ndarray, valid: np.ndarray) -> np.ndarray:
     return np.linalg.cholesky(safe)
 
 
+def curvatures_over(regressor: BallRegressor, boxes: Ball, parameters: np.ndarray) -> Ball:
+    """The second derivatives ``d^2 M / dq_k dq_j`` of each model (rows of ``parameters``,
+    armature excluded) over boxes of ``q`` ((boxes, n)): (boxes, k, j, models, n, n), computed
+    over at most :data:`CURVATURE_CHUNK_BYTES` of recursion at a time."""
+    n = boxes.mid.shape[-1]
+    per_box = n * (n + 1) // 2 * n * len(parameters) * 3 * 8 * 8
+    chunk = max(1, int(CURVATURE_CHUNK_BYTES // max(per_box, 1)))
+    parts = [
+        regressor.mass_matrix_curvatures(boxes[start : start + chunk], parameters)
+        for start in range(0, len(boxes.mid), chunk)
+    ]
+    return Ball(np.concatenate([p.mid for p in parts]), np.concatenate([p.rad for p in parts]))
+
+
 def inertia_models(
     regressor: BallRegressor,
     parameters: np.ndarray,
@@ -158,11 +168,15 @@ def inertia_models(
     q: Ball,
     reference_radii: np.ndarray,
     tube: float,
+    curvatures: Ball,
+    group: np.ndarray,
 ) -> tuple[list[InertiaModel], list[np.ndarray]]:
     """The inertia model of each model copy (rows of ``parameters``, standard parameters of
     its bodies, and of ``armature``) over the cells of the reference (half-widths
     ``reference_radii``) and the tube ``||e|| <= tube`` around them, ``q`` a box that holds
-    both (:func:`inertia_model`), with the slopes ``s_k`` for its rates."""
+    both (:func:`inertia_model`), with the slopes ``s_k`` for its rates; ``curvatures`` the
+    second derivatives over boxes (:func:`curvatures_over`), cell ``c``'s box holding its region
+    being ``group[c]``."""
     cells, n = q.mid.shape
     centers = regressor.mass_matrices(Ball.point(q.mid), parameters)
     diagonal = np.einsum("pi,ij->pij", armature, np.eye(n))
@@ -172,25 +186,6 @@ def inertia_models(
         Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
     )
     slopes = regressor.mass_matrices(along, parameters).dot  # (cells, k, P, n, n)
-    # Second derivatives over boxes of consecutive cells (each the hull of its cells' boxes,
-    # tube included): a second-order term, so a coarser box costs little. At least
-    # CURVATURE_CELLS, and (n + 1) / 2 on longer chains: their n (n + 1) / 2 pairs then cost
-    # what the n first derivatives do, so the cost keeps growing as n^3.
-    size = max(1, min(max(CURVATURE_CELLS, math.ceil((n + 1) / 2)), cells))
-    group = np.arange(cells) // size
-    starts = np.arange(0, cells, size)
-    lower = np.minimum.reduceat(q.mid - q.rad, starts, axis=0)
-    upper = np.maximum.reduceat(q.mid + q.rad, starts, axis=0)
-    boxes = Ball.hull(lower, upper)
-    per_box = n * (n + 1) // 2 * n * len(parameters) * 3 * 8 * 8
-    chunk = max(1, int(CURVATURE_CHUNK_BYTES // max(per_box, 1)))
-    parts = [
-        regressor.mass_matrix_curvatures(boxes[start : start + chunk], parameters)
-        for start in range(0, len(starts), chunk)
-    ]
-    curvatures = Ball(
-        np.concatenate([p.mid for p in parts]), np.concatenate([p.rad for p in parts])
-    )
     remainder, spread = taylor_terms(curvatures, group, reference_radii + tube)
     pairs = [
         inertia_model(

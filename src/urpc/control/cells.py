@@ -17,10 +17,12 @@ one-period floor over the cells' enclosures is :mod:`urpc.control.period_bound`.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
+from ..model.ball_arithmetic import U
 from ..model.inertia_bounds import InertiaBounds
 from ..model.regressor_balls import Ball, BallRegressor, Jet, matvec, parameters_of
 from ..trajectories import Trajectory, covered_span
@@ -32,18 +34,51 @@ from .cell_bounds import (
     plant_hull,
     velocity_bound,
 )
-from .cell_inertia import LAPACK_MARGIN, InertiaModel, congruence, inertia_models
+from .cell_inertia import (
+    LAPACK_MARGIN,
+    InertiaModel,
+    congruence,
+    curvatures_over,
+    inertia_models,
+)
 from .interval import IntervalPassivityController
 from .sampled_joints import JointTerms
 
-#: Cells are cut so that the reference moves at most this far [rad] per joint within one.
-CELL_MOTION = 0.01
-#: Bounds on the number of cells.
-MIN_CELLS, MAX_CELLS = 16, 4000
+#: The first cells are cut so that the reference moves at most this far [rad] per joint within
+#: one; the search then splits the cells that decide the floor (:meth:`CellFloor.refine`).
+CELL_MOTION = 0.02
+#: Bounds on the number of first cells.
+MIN_CELLS, MAX_CELLS = 8, 4000
+#: The second derivatives of M are enclosed over boxes of this many first cells (more on long
+#: chains).
+CURVATURE_CELLS = 4
+#: A cell is split at most this many times (its width at least 2^-MAX_DEPTH of its first cell).
+MAX_DEPTH = 5
+
+
+@dataclasses.dataclass(frozen=True)
+class CellBatch:
+    """Cells enclosed together: their spans ``[start, end]`` [s] (before the widening by the
+    period that follows), their refinement depth, and the curvature group of each (the box of
+    first cells whose second derivatives of ``M`` the cell reuses, :meth:`CellFloor.refine`)."""
+
+    start: np.ndarray
+    end: np.ndarray
+    depth: np.ndarray
+    group: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.start)
 
 
 class CellFloor:
     """The certificate's quantities over cells of the reference, per piece of the box.
+
+    The cells start coarse and are split where the floor needs it (:meth:`refine`, called by
+    the search, :mod:`urpc.control.sampled_search`): each split cell is replaced by its two
+    halves, enclosed on their own; every other cell keeps its enclosures. Every cell's
+    enclosures hold for every time of the cell (widened by the period that follows), whatever
+    the partition: a partition only decides how tight they are.
 
     Args:
         controller: An implicit sampled-data controller (or any interval controller, for the
@@ -51,8 +86,8 @@ class CellFloor:
         trajectory: The reference; it must give :meth:`Trajectory.jerk_bound`.
         duration: The time span covered [s] (one period of a periodic reference when shorter:
             :attr:`span`).
-        cells: Number of cells (default: the reference moves at most :data:`CELL_MOTION` per
-            joint within a cell, between :data:`MIN_CELLS` and :data:`MAX_CELLS`).
+        cells: Number of first cells (default: the reference moves at most :data:`CELL_MOTION`
+            per joint within a cell, between :data:`MIN_CELLS` and :data:`MAX_CELLS`).
     """
 
     def __init__(
@@ -79,8 +114,18 @@ class CellFloor:
             probe = np.linspace(0.0, self.span, 257)
             speed = float(np.max(np.abs(np.atleast_2d(trajectory.evaluate(probe)[1]))))
             cells = int(math.ceil(self.span * speed / CELL_MOTION))
-        self.cells = int(np.clip(cells, MIN_CELLS, MAX_CELLS))
-        self.edges = np.linspace(0.0, self.span, self.cells + 1)
+        first = int(np.clip(cells, MIN_CELLS, MAX_CELLS))
+        edges = np.linspace(0.0, self.span, first + 1)
+        # The second derivatives of M are enclosed over boxes of consecutive first cells (and
+        # reused by their halves): one first cell each, (n + 1) / 8 on chains of more than 7
+        # links, so that their n (n + 1) / 2 pairs cost what the n first derivatives do and the
+        # cost grows as n^3.
+        size = max(1, min(CURVATURE_CELLS * math.ceil((self.dof + 1) / 8), first))
+        self._batches = [
+            CellBatch(edges[:-1], edges[1:], np.zeros(first, dtype=int), np.arange(first) // size)
+        ]
+        self._active = [np.ones(first, dtype=bool)]
+        self._generation = 0
         # Models: nominal, the law's lower bound, then (lower, upper) per piece.
         self.pieces = split_box(box)
         piece_bounds = [InertiaBounds(robot, piece) for piece in self.pieces]
@@ -94,17 +139,67 @@ class CellFloor:
         self._piece_hulls = [plant_hull(robot, piece) for piece in self.pieces]
         self._cache: dict[tuple, dict] = {}
         self._tube_cache: dict[tuple, dict] = {}
+        self._curvature_cache: dict[tuple, Ball] = {}
+
+    # ------------------------------------------------------------------------- the partition
+    @property
+    def cells(self) -> int:
+        """The number of cells of the partition."""
+        return int(sum(int(mask.sum()) for mask in self._active))
+
+    def spans(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every cell's ``[start, end]`` [s] (before widening), in the order of the cell axis of
+        :meth:`quantities`."""
+        return tuple(
+            np.concatenate(
+                [getattr(b, side)[m] for b, m in zip(self._batches, self._active, strict=True)]
+            )
+            for side in ("start", "end")
+        )  # type: ignore[return-value]
+
+    def refine(self, cells) -> int:
+        """Split the given cells (indices along the cell axis of :meth:`quantities`) in two
+        halves each, except those already split :data:`MAX_DEPTH` times; the halves are
+        enclosed when next asked for. Returns how many cells were split."""
+        chosen = np.zeros(self.cells, dtype=bool)
+        chosen[np.asarray(cells, dtype=int)] = True
+        offset, parts = 0, []
+        for batch, active in zip(self._batches, self._active, strict=True):
+            local = np.flatnonzero(active)
+            take = local[chosen[offset : offset + len(local)]]
+            offset += len(local)
+            take = take[batch.depth[take] < MAX_DEPTH]
+            active[take] = False
+            parts.append((batch, take))
+        start = np.concatenate([b.start[t] for b, t in parts])
+        if not len(start):
+            return 0
+        end = np.concatenate([b.end[t] for b, t in parts])
+        depth = np.concatenate([b.depth[t] for b, t in parts]) + 1
+        group = np.concatenate([b.group[t] for b, t in parts])
+        middle = 0.5 * (start + end)
+        self._batches.append(
+            CellBatch(
+                np.concatenate([start, middle]), np.concatenate([middle, end]),
+                np.concatenate([depth, depth]), np.concatenate([group, group]),
+            )
+        )  # fmt: skip
+        self._active.append(np.ones(2 * len(start), dtype=bool))
+        self._generation += 1
+        self._cache.clear()
+        return len(start)
 
     # ------------------------------------------------------------------------- cell boxes
-    def _states(self, tube: float, r_max: float, extension: float, along_reference=False):
-        """Jets over the cells: ``q``, ``qd_a`` (= ``qd`` at ``r = 0``), ``qdd_a`` at ``r = 0``, and
-        the plant's velocity ball with ``||r|| <= r_max``. The rates are those of the actual
-        motion (``e`` moves at ``ed``), or with ``along_reference`` those of the reference at a
-        fixed error (the error's own motion is then counted through the tube's Jacobian)."""
+    def _states(
+        self, batch: CellBatch, tube: float, r_max: float, extension: float, along_reference=False
+    ):
+        """Jets over the cells of a batch: ``q``, ``qd_a`` (= ``qd`` at ``r = 0``), ``qdd_a`` at
+        ``r = 0``, and the plant's velocity ball with ``||r|| <= r_max``. The rates are those of
+        the actual motion (``e`` moves at ``ed``), or with ``along_reference`` those of the
+        reference at a fixed error (the error's own motion is then counted through the tube's
+        Jacobian)."""
         Kr = self.Kr
-        q, rq, qd, rqd, qdd, rqdd, J = self.trajectory.enclose(
-            self.edges[:-1], self.edges[1:] + extension
-        )
+        q, rq, qd, rqd, qdd, rqdd, J = self.trajectory.enclose(batch.start, batch.end + extension)
         e = np.full(self.dof, tube)
         ed = r_max + Kr * tube  # |ed_i| <= ||r|| + Kr_i ||e||
         velocity = Ball(qd, rqd + ed)  # the plant's qd = qd_d - ed
@@ -119,15 +214,30 @@ class CellFloor:
 
     def quantities(self, tube: float, r_max: float, extension: float) -> dict:
         """Every cell's enclosures for the tube ``||e|| <= tube``, ``||r|| <= r_max`` [rad, rad/s],
-        cells widened by ``extension`` [s] (cached). The enclosures over the tube
-        (:meth:`_tube_enclosures`, the costly part) do not depend on ``r_max``: only the plant's
-        velocity box and the rates do, and they enter affinely, so a new ``r_max`` costs a
-        recombination only."""
-        key = (round(tube, 15), round(r_max, 12), round(extension, 15))
+        cells widened by ``extension`` [s] (cached until the next :meth:`refine`): per-cell
+        arrays, the cells along their first axis (the last for ``R``, ``RM``, ``V``, ``Rs`` and
+        ``R_links``) in the order of :meth:`spans` (also given as ``cell_start``,
+        ``cell_end``). The enclosures over the tube (:meth:`_tube_enclosures`, the costly
+        part) are computed once per batch of cells and do not depend on ``r_max``: only the
+        plant's velocity box and the rates do, and they enter affinely, so a new ``r_max``
+        costs a recombination only."""
+        key = (round(tube, 15), round(r_max, 12), round(extension, 15), self._generation)
         if key in self._cache:
             return self._cache[key]
-        enclosed = self._tube_enclosures(tube, extension)
-        _, qd_a, qdd_a, _ = self._states(tube, r_max, extension)
+        used = [k for k, mask in enumerate(self._active) if mask.any()]
+        out = merge_cells(
+            [self._batch_quantities(k, tube, r_max, extension) for k in used],
+            [self._active[k] for k in used],
+        )
+        out["cell_start"], out["cell_end"] = self.spans()
+        self._cache[key] = out
+        return out
+
+    def _batch_quantities(self, index: int, tube: float, r_max: float, extension: float) -> dict:
+        """:meth:`quantities` for the cells of one batch."""
+        batch = self._batches[index]
+        enclosed = self._tube_enclosures(index, tube, extension)
+        _, qd_a, qdd_a, _ = self._states(batch, tube, r_max, extension)
         # The plant's velocity qd = qd_d - ed: the reference's box plus the error's rate, a ball
         # ||ed|| <= ||r|| + ||Kr e|| (componentwise |ed_i| <= ||r|| + Kr_i ||e||).
         reference_velocity = enclosed["reference_velocity"]
@@ -175,25 +285,25 @@ class CellFloor:
                     coriolis=gamma + piece["gamma_delta"], metric_rate=metric_rate,
                 )
             )  # fmt: skip
-        self._cache[key] = out
         return out
 
-    def _tube_enclosures(self, tube: float, extension: float) -> dict:
-        """The enclosures over the tube ``||e|| <= tube`` that do not depend on ``r_max``
-        (cached): inertia models, the mismatch and its rate along the reference, the Coriolis
-        terms as coefficients of the velocity radii."""
-        key = (round(tube, 15), round(extension, 15))
+    def _tube_enclosures(self, index: int, tube: float, extension: float) -> dict:
+        """The enclosures over the tube ``||e|| <= tube`` that do not depend on ``r_max``, for
+        the cells of one batch (cached): inertia models, the mismatch and its rate along the
+        reference, the Coriolis terms as coefficients of the velocity radii."""
+        key = (index, round(tube, 15), round(extension, 15))
         if key in self._tube_cache:
             return self._tube_cache[key]
-        cells = self.cells
-        q, qd_a, qdd_a, _ = self._states(tube, 0.0, extension)
-        reference_q = self._states(0.0, 0.0, extension)[0].val
-        models, model_slopes = self._inertia_models(q.val, reference_q.rad, tube)
+        batch = self._batches[index]
+        cells = len(batch)
+        q, qd_a, qdd_a, _ = self._states(batch, tube, 0.0, extension)
+        reference_q = self._states(batch, 0.0, 0.0, extension)[0].val
+        models, model_slopes = self._inertia_models(batch, q.val, reference_q.rad, tube, extension)
         nominal, law = models[0], models[1]
         # d/dt w = (rate along the reference at a fixed e) + (Jacobian along e) ed.
-        reference = self._states(tube, 0.0, extension, along_reference=True)
+        reference = self._states(batch, tube, 0.0, extension, along_reference=True)
         Y = self.regressor.slotine_li(reference[0], reference[1], reference[1], reference[2])
-        center, tube_jacobian = self._mismatch_parts(tube, extension)
+        center, tube_jacobian = self._mismatch_parts(batch, tube, extension)
         hull = self._plant_hull
         # The plant's Coriolis matrix (every plant of the piece, over the plant's velocity box,
         # affine in its radii) and the Coriolis mismatch along qd_a, as centered forms over each
@@ -218,7 +328,7 @@ class CellFloor:
         torque_per_error_rate = np.sqrt(
             np.sum((np.abs(along_error.mid) + along_error.rad) ** 2, axis=1)
         )
-        reference_velocity = self._states(0.0, 0.0, extension)[3]
+        reference_velocity = self._states(batch, 0.0, 0.0, extension)[3]
         # |tau_i| of every plant of the box at r = 0 over the tube (the rigid bodies by the
         # regressor over the parameter hull, the tube by the Jacobian, the drives at their ends).
         rigid = matvec(center, hull)
@@ -329,32 +439,80 @@ class CellFloor:
         """Only ``lambda_L`` (the lightest mode of every piece's lower bound) and ``lambda_U``
         over the cells at ``e = 0``: what Theorem 1 and the paper law's condition need, without
         the mismatch and Coriolis enclosures."""
-        q, _, _, _ = self._states(0.0, 0.0, extension)
-        models, _ = self._inertia_models(q.val, q.val.rad, 0.0)
         lower, upper = math.inf, 0.0
-        for low, high in zip(models[2::2], models[3::2], strict=True):
-            lam_L = np.where(low.valid, low.lam_min * (1 - low.eps), -math.inf)
-            lower = min(lower, float(np.min(lam_L)) * (1 - LAPACK_MARGIN))
-            upper = max(upper, float(np.max(high.lam_max * (1 + high.eps))) * (1 + LAPACK_MARGIN))
+        for batch, active in zip(self._batches, self._active, strict=True):
+            if not active.any():
+                continue
+            q, _, _, _ = self._states(batch, 0.0, 0.0, extension)
+            models, _ = self._inertia_models(batch, q.val, q.val.rad, 0.0, extension)
+            for low, high in zip(models[2::2], models[3::2], strict=True):
+                lam_L = np.where(low.valid, low.lam_min * (1 - low.eps), -math.inf)[active]
+                lower = min(lower, float(np.min(lam_L)) * (1 - LAPACK_MARGIN))
+                high_U = (high.lam_max * (1 + high.eps))[active]
+                upper = max(upper, float(np.max(high_U)) * (1 + LAPACK_MARGIN))
         return {"cells": float(self.cells), "lambda_L": lower, "lambda_U": upper}
 
     def _inertia_models(
-        self, q: Ball, reference_radii: np.ndarray, tube: float
+        self, batch: CellBatch, q: Ball, reference_radii: np.ndarray, tube: float, extension: float
     ) -> tuple[list[InertiaModel], list[np.ndarray]]:
         """Every inertia model (nominal, the law's ``M_L``, each piece's ``M_L`` and ``M_U``) over
-        the cells (:func:`~urpc.control.cell_inertia.inertia_models`)."""
+        the cells of a batch (:func:`~urpc.control.cell_inertia.inertia_models`), ``q`` the box
+        of each cell with the tube."""
+        curvatures, group = self._curvatures(batch, q, tube, extension)
         return inertia_models(
-            self.regressor, self._parameters, self._armature, q, reference_radii, tube
-        )
+            self.regressor, self._parameters, self._armature, q, reference_radii, tube,
+            curvatures, group,
+        )  # fmt: skip
 
-    def _mismatch_parts(self, tube: float, extension: float):
+    def _curvatures(
+        self, batch: CellBatch, q: Ball, tube: float, extension: float
+    ) -> tuple[Ball, np.ndarray]:
+        """The second derivatives of every model's ``M`` over boxes that hold the cells of a
+        batch, and the box of each cell: its group's (the hull of the group's first cells'
+        boxes, enclosed once per tube), or, for a cell that sticks out of it (a half's Taylor
+        box need not lie in its parent's), one of its own around both."""
+        key = (round(tube, 15), round(extension, 15))
+        if key not in self._curvature_cache:
+            first = self._batches[0]
+            box = self._states(first, tube, 0.0, extension)[0].val
+            starts = np.flatnonzero(np.r_[True, np.diff(first.group) != 0])
+            lower = np.minimum.reduceat(outward(box, -1), starts, axis=0)
+            upper = np.maximum.reduceat(outward(box, 1), starts, axis=0)
+            slack = 1e-12 * (np.abs(lower) + np.abs(upper))  # the first cells lie well inside
+            boxes = Ball.hull(lower - slack, upper + slack)
+            self._curvature_cache[key] = (
+                boxes,
+                curvatures_over(self.regressor, boxes, self._parameters),
+            )
+        boxes, curvatures = self._curvature_cache[key]
+        group = batch.group
+        inside = np.all(
+            (outward(q, -1) >= inward(boxes, -1)[group])
+            & (outward(q, 1) <= inward(boxes, 1)[group]),
+            axis=-1,
+        )
+        if np.all(inside):
+            return curvatures, group
+        outside = np.flatnonzero(~inside)
+        own = Ball.hull(
+            np.minimum(outward(q, -1)[outside], outward(boxes, -1)[group[outside]]),
+            np.maximum(outward(q, 1)[outside], outward(boxes, 1)[group[outside]]),
+        )
+        extra = curvatures_over(self.regressor, own, self._parameters)
+        group = group.copy()
+        group[outside] = len(boxes.mid) + np.arange(len(outside))
+        return Ball(
+            np.concatenate([curvatures.mid, extra.mid]), np.concatenate([curvatures.rad, extra.rad])
+        ), group
+
+    def _mismatch_parts(self, batch: CellBatch, tube: float, extension: float):
         """``Y_SL`` over each cell of the reference at ``e = 0`` (a ball), and its Jacobian along
         each error direction ``e_k`` over the whole tube (a ball, (cells, k, n, 10 n)): at
         ``r = 0`` the state is ``(q_d - e, qd_d + Kr e, qd_d + Kr e, qdd_d - Kr^2 e)``, so that
         ``w(t, e) = w(t, 0) + sum_k e_k dw/de_k(xi)`` for some ``xi`` in the tube."""
-        q0, qd0, qdd0, _ = self._states(0.0, 0.0, extension)
+        q0, qd0, qdd0, _ = self._states(batch, 0.0, 0.0, extension)
         center = self.regressor.slotine_li(q0.val, qd0.val, qd0.val, qdd0.val)
-        q, qd_a, qdd_a, _ = self._states(tube, 0.0, extension)
+        q, qd_a, qdd_a, _ = self._states(batch, tube, 0.0, extension)
         n, Kr = self.dof, self.Kr
         eye = np.eye(n)
 
@@ -375,7 +533,7 @@ class CellFloor:
     def figures(self, quantities: dict) -> dict[str, float]:
         pieces = quantities["pieces"]
         return {
-            "cells": float(self.cells),
+            "cells": float(len(quantities["cell_start"])),
             "pieces": float(len(pieces)),
             "lambda_L": float(min(np.min(p["lam_L"]) for p in pieces)),
             "lambda_U": float(max(np.max(p["lam_U"]) for p in pieces)),
@@ -383,6 +541,36 @@ class CellFloor:
             "nu": float(max(np.max(p["nu"]) for p in pieces)),
         }
 
-    def cell_time(self, cell: int) -> tuple[float, float]:
-        """The time span [s] of a cell (before its widening)."""
-        return float(self.edges[cell]), float(self.edges[cell + 1])
+
+#: The entries of :meth:`CellFloor.quantities` whose cell axis is the last (the others': the
+#: first; numbers that are not arrays are the same for every cell).
+LAST_AXIS = frozenset({"R", "RM", "V", "Rs", "R_links"})
+
+
+def merge_cells(outs: list[dict], masks: list[np.ndarray]) -> dict:
+    """One :meth:`CellFloor.quantities` of the batches' (the cells where ``masks`` hold)."""
+
+    def merge(key, values):
+        first = values[0]
+        if isinstance(first, list):
+            return [
+                {k: merge(k, [v[j][k] for v in values]) for k in first[j]}
+                for j in range(len(first))
+            ]
+        if not isinstance(first, np.ndarray) or first.ndim == 0:
+            return first
+        if key in LAST_AXIS:
+            return np.concatenate([v[..., m] for v, m in zip(values, masks, strict=True)], axis=-1)
+        return np.concatenate([v[m] for v, m in zip(values, masks, strict=True)], axis=0)
+
+    return {key: merge(key, [out[key] for out in outs]) for key in outs[0]}
+
+
+def outward(box: Ball, side: int) -> np.ndarray:
+    """The end of a ball on ``side`` (-1 lower, +1 upper), rounded outward (beyond it)."""
+    return box.mid + side * (box.rad * (1 + 4 * U) + 4 * U * np.abs(box.mid))
+
+
+def inward(box: Ball, side: int) -> np.ndarray:
+    """The end of a ball on ``side``, rounded inward (within it)."""
+    return box.mid + side * (box.rad * (1 - 4 * U) - 4 * U * np.abs(box.mid))

@@ -17,6 +17,11 @@ import numpy as np
 
 from .cells import CellFloor
 
+#: The cells within this fraction of a term's extreme are split (:meth:`PeriodBound.critical_cells`).
+CRITICAL_SHARE = 0.05
+#: ... unless more than this fraction of the cells are (the term is nearly flat over them).
+FLAT_FRACTION = 0.25
+
 
 class PeriodBound:
     """The floor and its parts from a :class:`CellFloor`'s enclosures (same controller)."""
@@ -56,6 +61,50 @@ class PeriodBound:
                 break
         return worst, parts
 
+    def critical_cells(
+        self, T: float, d: float, quantities: dict, tube: float, share: float = CRITICAL_SHARE
+    ) -> np.ndarray:
+        """The cells that decide the floor at period ``T`` in the tube ``tube`` (indices along
+        the cell axis), the ones to split: on every piece whose floor is within ``share`` of the
+        worst, the cells where an inertia model fails or the contraction margin ``a - b`` is not
+        positive; when none does, the cells within ``share`` of an extreme of a term the floor
+        takes over the cells (the least margin, the largest quasi-static error plus response,
+        pushed deviation and forcing)."""
+        d = d + self.joints.coulomb
+        D = self.gain(T)
+        floors, terms_of = [], []
+        for p in quantities["pieces"]:
+            floors.append(self._piece_floor(T, d, D, quantities, p, tube)[0])
+            terms_of.append(self.cell_terms(T, d, D, quantities, p, tube))
+        worst = max(floors)
+        chosen = np.zeros(len(quantities["cell_start"]), dtype=bool)
+        for floor, p, terms in zip(floors, quantities["pieces"], terms_of, strict=True):
+            if floor < worst * (1 - share):
+                continue
+            failing = ~p["valid"] | ~(terms["margin"] > 0)
+            if failing.any():
+                chosen |= failing
+                continue
+            near = [terms["margin"] <= terms["margin"].min() * (1 + share)]
+            near += [
+                terms[k] >= terms[k].max() * (1 - share) for k in ("slow", "pushed", "forcing")
+            ]
+            for cells in near:  # a term nearly flat over the cells gains little from splitting
+                if cells.sum() <= FLAT_FRACTION * len(cells):
+                    chosen |= cells
+        return np.flatnonzero(chosen)
+
+    def failing_cells(self, T: float, d: float, quantities: dict) -> int:
+        """How many cells fail (an inertia model, or a contraction margin ``a - b`` that is not
+        positive at ``rho = 0``) on any piece."""
+        d = d + self.joints.coulomb
+        D = self.gain(T)
+        failing = np.zeros(len(quantities["cell_start"]), dtype=bool)
+        for p in quantities["pieces"]:
+            terms = self.cell_terms(T, d, D, quantities, p, 0.0)
+            failing |= ~p["valid"] | ~(terms["margin"] > 0)
+        return int(failing.sum())
+
     def cell_terms(self, T, d, D, q: dict, p: dict, tube: float) -> dict[str, np.ndarray]:
         """The per-cell terms of the floor for one piece (the floor takes their extremes)."""
         n = self.dof
@@ -69,7 +118,8 @@ class PeriodBound:
         lag = p["lag"] + error_rate * p["lag_e"]
         lag_M = p["lag_M"] + error_rate * p["lag_M_e"]
         beta, lam_L, lam_U = p["beta"], p["lam_L"], p["lam_U"]
-        a = beta * D * T / (D * T + beta * lam_U)
+        with np.errstate(invalid="ignore"):  # beta = -inf where an inertia model fails
+            a = beta * D * T / (D * T + beta * lam_U)
         growth = 0.5 * T * p["metric_rate"]  # the metric M(q) changes within the period
         b = T * (p["K"] * (0.5 + p["nu"]) + p["coriolis"] + self.joints.damping / lam_L) + growth
         sqrt_L, sqrt_U = np.sqrt(lam_L), np.sqrt(lam_U)

@@ -15,6 +15,13 @@ from .certificate_report import dominant_link, lightest_joint
 from .interval import IntervalPassivityController
 from .period_bound import PeriodBound
 
+#: At most this many rounds of splitting the cells that decide the floor ...
+REFINE_ROUNDS = 6
+#: ... while each lowers it by at least this fraction ...
+REFINE_GAIN = 0.02
+#: ... and the cells stay at most this many.
+MAX_REFINED_CELLS = 4000
+
 
 class SampledSearch:
     """The floor of the implicit law as a fixed point over tubes, and the largest period.
@@ -37,21 +44,62 @@ class SampledSearch:
         self.T = controller.sample_period
         self.extension = 2.0 * self.T
         self.epsilon = controller.epsilon
+        self._enclosed: dict[tuple, dict] = {}  # (tube, T): the quantities of the last partition
 
     def enclose(self, tube: float, T: float | None = None) -> dict:
         """The cell quantities over the tube ``||e|| <= tube`` with ``||r|| <= r_max``, raising
-        ``r_max`` until the bound of ``||r||`` at the least self-consistent tube lies inside it."""
+        ``r_max`` until the bound of ``||r||`` at the least self-consistent tube lies inside it,
+        and, in the tube ``epsilon``, splitting the cells that decide the floor
+        (:meth:`PeriodBound.critical_cells`) while that lowers it by at least
+        :data:`REFINE_GAIN` (or, without a floor, fails on fewer cells or by less)."""
         T = self.T if T is None else T
+        key = (round(tube, 15), T)
+        if key in self._enclosed:
+            return self._enclosed[key]
         r_max = 1.5 * float(self.controller.Kr.max()) * tube + 1e-6
+        best = None
+        # Wider tubes are for the report only: the cells are split for the certificate's own.
+        rounds = REFINE_ROUNDS if tube == self.epsilon else 0
+        for _ in range(rounds + 1):
+            quantities, r_max = self._consistent(tube, r_max, T)
+            floor, parts, rho = self.least_tube(quantities, T)
+            score = self._score(quantities, T, floor, parts)
+            if rounds == 0 or (best is not None and not score < best * (1 - REFINE_GAIN)):
+                break
+            best = score if best is None else min(best, score)
+            cells = self.bound.critical_cells(
+                T, self.d, quantities, rho if math.isfinite(floor) else 0.0
+            )
+            if self.floor_of.cells + len(cells) > MAX_REFINED_CELLS:
+                break
+            if not self.floor_of.refine(cells):
+                break
+        self._enclosed[key] = quantities
+        return quantities
+
+    def _consistent(self, tube: float, r_max: float, T: float) -> tuple[dict, float]:
         for _ in range(5):
             cells = self.floor_of.cells
             self.say(f"enclosing {cells} cells (||e|| <= {tube:.3g}, ||r|| <= {r_max:.3g})")
             quantities = self.floor_of.quantities(tube, r_max, self.extension)
             floor, parts, _ = self.least_tube(quantities, T)
             if not math.isfinite(floor) or parts["r_sup"] <= r_max:
-                return quantities
+                break
             r_max = 1.25 * parts["r_sup"]
-        return quantities
+        return quantities, r_max
+
+    def _score(self, quantities: dict, T: float, floor: float, parts: dict) -> float:
+        """What refinement lowers: the floor, else the floor at ``rho = 0``, else (no
+        contraction margin, or invalid inertia models) the number of failing cells plus how far
+        the worst margin is below zero (scaled), so that fewer or milder failures score less."""
+        if math.isfinite(floor):
+            return floor
+        least, parts = self.bound.floor_at(T, self.d, quantities, 0.0)
+        if math.isfinite(least):
+            return 1e6 + least
+        return 1e12 * (1 + self.bound.failing_cells(T, self.d, quantities)) - parts.get(
+            "margin", -math.inf
+        )
 
     def least_tube(self, quantities: dict, T: float) -> tuple[float, dict, float]:
         """The least ``rho <= tube`` with ``floor(rho) <= rho`` (the fixed point reached from
@@ -110,10 +158,34 @@ class SampledSearch:
 
     def max_sample_period(self) -> float:
         """The largest ``T <= 2 T_controller`` with a floor below ``epsilon`` in the tube
-        ``||e|| <= epsilon`` (the cells' enclosures hold for every period up to ``2 T``)."""
+        ``||e|| <= epsilon`` (the cells' enclosures hold for every period up to ``2 T``),
+        splitting the cells that fail just above it while that lengthens it by at least
+        :data:`REFINE_GAIN`."""
         quantities = self.enclose(self.epsilon)  # cached from floor()
         self.say("searching the largest sample period")
+        best = self._largest_period(quantities)
+        for _ in range(REFINE_ROUNDS):
+            if best >= self.extension:
+                break
+            failing = min(self.extension, max(best, self.extension * 1e-4) * (1 + 2 * REFINE_GAIN))
+            floor, _, rho = self.least_tube(quantities, failing)
+            cells = self.bound.critical_cells(
+                failing, self.d, quantities, rho if math.isfinite(floor) else 0.0
+            )
+            if self.floor_of.cells + len(cells) > MAX_REFINED_CELLS:
+                break
+            if not self.floor_of.refine(cells):
+                break
+            self.say(f"searching the largest sample period ({self.floor_of.cells} cells)")
+            quantities, _ = self._consistent(self.epsilon, quantities["r_max"], failing)
+            longer = self._largest_period(quantities)
+            if not longer > best * (1 + REFINE_GAIN):
+                best = max(best, longer)
+                break
+            best = longer
+        return best
 
+    def _largest_period(self, quantities: dict) -> float:
         def ok(T: float) -> bool:
             floor, parts, _ = self.least_tube(quantities, T)
             return floor <= self.epsilon and parts.get("r_sup", math.inf) <= quantities["r_max"]
@@ -137,14 +209,14 @@ class SampledSearch:
         shares = parts.get("shares") or {}
         out: dict[str, Any] = {}
         if "invalid_cell" in parts:
-            out["invalid_time"] = floor_of.cell_time(parts["invalid_cell"])[0]
+            out["invalid_time"] = float(quantities["cell_start"][parts["invalid_cell"]])
         if shares:
             dominant = max(shares, key=shares.get)
             total = sum(shares.values()) or 1.0
             out["dominant_term"] = dominant
             out["term_shares"] = {k: v / total for k, v in shares.items()}
             cell = parts.get("slow_cell", 0)
-            out["worst_time"] = floor_of.cell_time(cell)[0]
+            out["worst_time"] = float(quantities["cell_start"][cell])
             lightest = lightest_joint(floor_of, quantities, cell)
             out["lightest_joint"] = floor_of.robot.joint_names[lightest]
             link = dominant_link(
