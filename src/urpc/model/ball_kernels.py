@@ -1,0 +1,982 @@
+"""The Newton-Euler recursion of :mod:`urpc.model.regressor_balls` as one compiled pass over a
+batch: midpoint-radius ball arithmetic over a truncated Taylor algebra.
+
+**The algebra.** Every scalar of the recursion is a vector of ``K`` components, each a ball: the
+value and its derivatives. A product of two such scalars is ``c_o = sum a_i b_j`` over the
+entries ``(i, j, o)`` of the algebra's product table (:class:`Algebra`): a ball (``K = 1``), a
+jet (value and time derivative, ``K = 2``), a jet of jets (the hyper-dual numbers ``q + s e_k +
+t e_j``, ``K = 4``), a value with ``D`` first derivatives sharing it (``K = 1 + D``), or a value
+with its gradient and Hessian in ``n`` coordinates (``K = 1 + n + n (n + 1) / 2``). The
+component ``(k, j)`` of the last is computed with the very terms, in the same order, as the
+``d^2 / ds dt`` component of the hyper-dual number with ``s = e_k``, ``t = e_j``; the first
+derivatives ``D`` of a shared value, as the jets along each direction: evaluating them together
+shares the value (and the first derivatives) instead of recomputing them for every direction or
+pair. ``cos`` and ``sin`` of a scalar are their Taylor polynomials of order 2 at the value,
+``f(x0) + f'(x0) d + f''(x0) d^2 / 2`` with ``d`` the scalar's derivative part (``d^3 = 0``).
+
+**Structural zeros.** Each vector of a component carries a flag: unset, the vector is exactly
+zero (a point at 0) and every product with it is skipped, which is exact. The flags start from
+the inputs (zero velocities of the mass matrices, unit accelerations, unit or sparse parameter
+rows, derivative components along one joint) and propagate: a product is flagged when one of its
+table entries has both operands flagged, a sum when one of its terms is. Nothing is padded:
+parameter rows that vanish on a body give it no force, and a force row vanishes until it meets a
+body that has one.
+
+**Rounding.** Every ball of the recursion is computed as a sum of ``N`` terms, each a ball or a
+product of two balls (a matrix-vector product contributes three terms per table entry, a cross
+product two): the midpoint is the floating-point sum of the terms' midpoint products ``t_i`` (in
+any order) and the radius is ``(sum rho_i + (N + 2) u sum |t_i|) (1 + 2 (N + 4) u)``, where
+``rho_i = |a| rad_b + rad_a (|b| + rad_b)`` is a product's radius (a ball term's radius itself)
+and ``u = 2^-53``. The exact sum differs from the floating-point one by at most ``gamma_N sum
+|t_i| <= (N + 2) u sum |t_i|`` (a product rounding and at most ``N - 1`` additions on each term's
+path, in any summation order; ``N u`` is tiny), and the radius, a sum of non-negative terms each
+at most ``N + 4`` roundings deep (three in a product's radius, ``N - 1`` additions, the rounding
+term, the inflation), is computed at least ``(1 - u)^(N + 4)`` times its exact value, which the
+factor ``1 + 2 (N + 4) u`` more than makes up. A lone ball term, or a term scaled by ``0``,
+``1`` or ``-1``, is copied exactly. Adding a child's force to its parent's is a ball sum as in
+:mod:`urpc.model.ball_arithmetic` (``2u |mid|``, inflated by ``1 + 8u``). ``cos``/``sin`` of a
+ball ``[x - r, x + r]`` are ``cos x +- (|sin x| r + r^2 / 2)`` plus 2 ulps for the library's
+rounding (as :func:`urpc.model.ball_arithmetic.cos_sin`). Compiled with numba: IEEE arithmetic,
+no fast-math, so the compiler neither reassociates nor contracts the operations the analysis
+counts. As in :mod:`urpc.model.ball_arithmetic`, underflow is not accounted for (the
+recursion's quantities are far from ``1e-300``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cache
+
+import numba
+import numpy as np
+
+#: Unit roundoff of IEEE double precision.
+U = 2.0**-53
+#: Factor that keeps a radius computed in rounded arithmetic above its exact value.
+UP = 1.0 + 8 * U
+
+_JIT = {"cache": True, "nogil": True, "boundscheck": False}
+
+
+# ============================================================================ algebras
+@dataclass(frozen=True)
+class Algebra:
+    """A truncated Taylor algebra: ``K`` components (0 the value) and its product table, sorted
+    by first operand: the entries ``(i, tj[e], to[e])`` for ``e`` in ``ptr[i]:ptr[i + 1]``."""
+
+    components: int
+    ptr: np.ndarray
+    tj: np.ndarray
+    to: np.ndarray
+
+    @staticmethod
+    def of(entries: list[tuple[int, int, int]], components: int) -> Algebra:
+        entries = sorted(entries, key=lambda e: (e[0], e[1]))  # stable: duplicates kept
+        first = np.array([e[0] for e in entries], dtype=np.int64)
+        ptr = np.searchsorted(first, np.arange(components + 1)).astype(np.int64)
+        tj = np.array([e[1] for e in entries], dtype=np.int64)
+        to = np.array([e[2] for e in entries], dtype=np.int64)
+        return Algebra(components, ptr, tj, to)
+
+
+@cache
+def first_order(directions: int) -> Algebra:
+    """A value and ``directions`` first derivatives (a jet for one direction)."""
+    entries = [(0, 0, 0)]
+    for d in range(1, directions + 1):
+        entries += [(0, d, d), (d, 0, d)]
+    return Algebra.of(entries, directions + 1)
+
+
+@cache
+def hyper_dual() -> Algebra:
+    """A jet of jets: components ``(val.val, val.dot, dot.val, dot.dot)``."""
+    entries = [(0, 0, 0), (0, 1, 1), (1, 0, 1), (0, 2, 2), (2, 0, 2)]
+    entries += [(0, 3, 3), (1, 2, 3), (2, 1, 3), (3, 0, 3)]
+    return Algebra.of(entries, 4)
+
+
+def pair_index(n: int) -> np.ndarray:
+    """The component of ``d^2 / dq_k dq_j`` in :func:`hessian` ``(n)``: ``(n, n)``, symmetric."""
+    index = np.zeros((n, n), dtype=np.int64)
+    first, second = np.triu_indices(n)
+    index[first, second] = 1 + n + np.arange(len(first))
+    index[second, first] = index[first, second]
+    return index
+
+
+@cache
+def hessian(n: int) -> Algebra:
+    """A value, its ``n`` first derivatives (components ``1 + k``) and its second derivatives
+    (components :func:`pair_index`); the diagonal ``(k, k)`` gets the product of the first
+    derivatives twice, as the hyper-dual ``s t`` component does with ``s = t = e_k``."""
+    pairs = pair_index(n)
+    K = 1 + n + n * (n + 1) // 2
+    entries = [(0, x, x) for x in range(K)]
+    for k in range(n):
+        entries.append((1 + k, 0, 1 + k))
+        for j in range(n):
+            entries += [(1 + k, 1 + j, int(pairs[k, j]))] * (2 if j == k else 1)
+    entries += [(int(c), 0, int(c)) for c in range(1 + n, K)]
+    return Algebra.of(entries, K)
+
+
+# ============================================================================ the model
+@dataclass(frozen=True)
+class Chain:
+    """A robot's joints as arrays for the kernel (see :class:`urpc.model.regressor_balls.
+    BallRegressor`): parents, kinds, axes, ``R(q) = A0 + cos q A1 + sin q A2`` (revolute) or the
+    fixed rotation and ``p(q) = translation + direction q`` (prismatic), and children in
+    reverse order of processing."""
+
+    parent: np.ndarray  # (n,) int64, -1: the base
+    revolute: np.ndarray  # (n,) bool
+    axis: np.ndarray  # (n, 3)
+    parts: np.ndarray  # (n, 3, 9): A0, A1, A2 (revolute) or the rotation in A0 (prismatic)
+    translation: np.ndarray  # (n, 3)
+    direction: np.ndarray  # (n, 3): rotation @ axis (prismatic), 0 (revolute)
+    gravity: np.ndarray  # (3,)
+
+
+# ============================================================================ accumulators
+# A sum of terms per component ``o`` and entry ``l``: midpoints ``acm``, radii ``acr``, term
+# magnitudes ``acs``, the number of terms ``acn[o]`` (0: the component is not flagged) and
+# whether a rounded product entered it ``acx[o]``.
+@numba.njit(**_JIT)
+def _begin(acn, acx):  # pragma: no cover - compiled
+    for o in range(acn.shape[0]):
+        acn[o] = 0
+        acx[o] = False
+
+
+@numba.njit(**_JIT)
+def _open(acm, acr, acs, acn, o, L):  # pragma: no cover - compiled
+    if acn[o] == 0:
+        for x in range(L):
+            acm[o, x] = 0.0
+            acr[o, x] = 0.0
+            acs[o, x] = 0.0
+
+
+@numba.njit(**_JIT)
+def _finish(acm, acr, acs, acn, acx, L, outm, outr, outf):  # pragma: no cover - compiled
+    """The balls of the sums: see the module's rounding analysis."""
+    for o in range(acn.shape[0]):
+        N = acn[o]
+        if N == 0:
+            outf[o] = False
+        elif N == 1 and not acx[o]:
+            outf[o] = True
+            for x in range(L):
+                outm[o, x] = acm[o, x]
+                outr[o, x] = acr[o, x]
+        else:
+            outf[o] = True
+            c = (N + 2) * U
+            F = 1.0 + 2 * (N + 4) * U
+            for x in range(L):
+                outm[o, x] = acm[o, x]
+                outr[o, x] = (acr[o, x] + c * acs[o, x]) * F
+
+
+@numba.njit(**_JIT)
+def _acc_ball(acm, acr, acs, acn, xm, xr, xf, sign, L):  # pragma: no cover - compiled
+    """``+= sign x`` (``sign`` is +-1: exact)."""
+    for o in range(xf.shape[0]):
+        if xf[o]:
+            _open(acm, acr, acs, acn, o, L)
+            acn[o] += 1
+            for x in range(L):
+                acm[o, x] += sign * xm[o, x]
+                acr[o, x] += xr[o, x]
+                acs[o, x] += abs(xm[o, x])
+
+
+@numba.njit(**_JIT)
+def _acc_matvec(
+    acm, acr, acs, acn, acx, Mm, Mr, Mf, xm, xr, xf, ptr, tj, to, transpose
+):  # pragma: no cover - compiled
+    """``+= M x`` (``M^T x`` if ``transpose``), ``M`` (K, 9) row-major 3x3, ``x`` (K, 3)."""
+    for i in range(Mf.shape[0]):
+        if not Mf[i]:
+            continue
+        for e in range(ptr[i], ptr[i + 1]):
+            j = tj[e]
+            if not xf[j]:
+                continue
+            o = to[e]
+            _open(acm, acr, acs, acn, o, 3)
+            acn[o] += 3
+            acx[o] = True
+            for r in range(3):
+                m = 0.0
+                rr = 0.0
+                s = 0.0
+                for k in range(3):
+                    if transpose:
+                        a = Mm[i, 3 * k + r]
+                        ar = Mr[i, 3 * k + r]
+                    else:
+                        a = Mm[i, 3 * r + k]
+                        ar = Mr[i, 3 * r + k]
+                    b = xm[j, k]
+                    br = xr[j, k]
+                    t = a * b
+                    m += t
+                    s += abs(t)
+                    rr += abs(a) * br + ar * (abs(b) + br)
+                acm[o, r] += m
+                acr[o, r] += rr
+                acs[o, r] += s
+
+
+@numba.njit(**_JIT)
+def _acc_cross(
+    acm, acr, acs, acn, acx, am, ar, af, bm, br, bf, sign, ptr, tj, to
+):  # pragma: no cover - compiled
+    """``+= sign (a x b)`` of 3-vectors (K, 3)."""
+    for i in range(af.shape[0]):
+        if not af[i]:
+            continue
+        for e in range(ptr[i], ptr[i + 1]):
+            j = tj[e]
+            if not bf[j]:
+                continue
+            o = to[e]
+            _open(acm, acr, acs, acn, o, 3)
+            acn[o] += 2
+            acx[o] = True
+            for x in range(3):
+                y = (x + 1) % 3
+                z = (x + 2) % 3
+                t1 = am[i, y] * bm[j, z]
+                t2 = am[i, z] * bm[j, y]
+                acm[o, x] += sign * (t1 - t2)
+                acs[o, x] += abs(t1) + abs(t2)
+                acr[o, x] += (
+                    abs(am[i, y]) * br[j, z] + ar[i, y] * (abs(bm[j, z]) + br[j, z])
+                    + abs(am[i, z]) * br[j, y] + ar[i, z] * (abs(bm[j, y]) + br[j, y])
+                )  # fmt: skip
+
+
+@numba.njit(**_JIT)
+def _acc_constant_scalar(acm, acr, acs, acn, acx, c, sm, sr, sf, L):  # pragma: no cover
+    """``+= c s``: an exact constant ``c`` (L,) times a scalar ``s`` (K,) of the algebra."""
+    exact = True
+    for x in range(L):
+        if c[x] != 0.0 and c[x] != 1.0 and c[x] != -1.0:
+            exact = False
+    for o in range(sf.shape[0]):
+        if not sf[o]:
+            continue
+        _open(acm, acr, acs, acn, o, L)
+        acn[o] += 1
+        if not exact:
+            acx[o] = True
+        for x in range(L):
+            t = c[x] * sm[o]
+            acm[o, x] += t
+            acr[o, x] += abs(c[x]) * sr[o]
+            acs[o, x] += abs(t)
+
+
+@numba.njit(**_JIT)
+def _acc_matmat(
+    acm, acr, acs, acn, acx, Am, Ar, Af, Bm, Br, Bf, columns, ptr, tj, to
+):  # pragma: no cover - compiled
+    """``+= A B``: ``A`` (K, 9) row-major 3x3, ``B`` (K, 3 columns) row-major 3 x columns."""
+    for i in range(Af.shape[0]):
+        if not Af[i]:
+            continue
+        for e in range(ptr[i], ptr[i + 1]):
+            j = tj[e]
+            if not Bf[j]:
+                continue
+            o = to[e]
+            _open(acm, acr, acs, acn, o, 3 * columns)
+            acn[o] += 3
+            acx[o] = True
+            for r in range(3):
+                for col in range(columns):
+                    m = 0.0
+                    rr = 0.0
+                    s = 0.0
+                    for k in range(3):
+                        a = Am[i, 3 * r + k]
+                        ra = Ar[i, 3 * r + k]
+                        b = Bm[j, columns * k + col]
+                        rb = Br[j, columns * k + col]
+                        t = a * b
+                        m += t
+                        s += abs(t)
+                        rr += abs(a) * rb + ra * (abs(b) + rb)
+                    acm[o, columns * r + col] += m
+                    acr[o, columns * r + col] += rr
+                    acs[o, columns * r + col] += s
+
+
+@numba.njit(**_JIT)
+def _skew(xm, xr, xf, Sm, Sr, Sf):  # pragma: no cover - compiled
+    """``S(x)`` (K, 9) of 3-vectors (K, 3) (exact)."""
+    for o in range(xf.shape[0]):
+        Sf[o] = xf[o]
+        if not xf[o]:
+            continue
+        a, b, c = xm[o, 0], xm[o, 1], xm[o, 2]
+        Sm[o, 0], Sm[o, 1], Sm[o, 2] = 0.0, -c, b
+        Sm[o, 3], Sm[o, 4], Sm[o, 5] = c, 0.0, -a
+        Sm[o, 6], Sm[o, 7], Sm[o, 8] = -b, a, 0.0
+        a, b, c = xr[o, 0], xr[o, 1], xr[o, 2]
+        Sr[o, 0], Sr[o, 1], Sr[o, 2] = 0.0, c, b
+        Sr[o, 3], Sr[o, 4], Sr[o, 5] = c, 0.0, a
+        Sr[o, 6], Sr[o, 7], Sr[o, 8] = b, a, 0.0
+
+
+# Columns of iota = (xx, xy, yy, xz, yz, zz) in each row of L(x): (I x)_0 = xx x0 + xy x1 + xz x2...
+_L_ROW0 = np.array([0, 1, 3])
+_L_ROW1 = np.array([1, 2, 4])
+_L_ROW2 = np.array([3, 4, 5])
+
+
+@numba.njit(**_JIT)
+def _inertia_map(xm, xr, xf, Lm, Lr, Lf):  # pragma: no cover - compiled
+    """``L(x)`` (K, 18), row-major 3x6, with ``I x = L(x) iota``, ``iota = (xx, xy, yy, xz, yz,
+    zz)`` (exact)."""
+    for o in range(xf.shape[0]):
+        Lf[o] = xf[o]
+        if not xf[o]:
+            continue
+        for x in range(18):
+            Lm[o, x] = 0.0
+            Lr[o, x] = 0.0
+        for x in range(3):
+            Lm[o, _L_ROW0[x]] = xm[o, x]
+            Lm[o, 6 + _L_ROW1[x]] = xm[o, x]
+            Lm[o, 12 + _L_ROW2[x]] = xm[o, x]
+            Lr[o, _L_ROW0[x]] = xr[o, x]
+            Lr[o, 6 + _L_ROW1[x]] = xr[o, x]
+            Lr[o, 12 + _L_ROW2[x]] = xr[o, x]
+
+
+@numba.njit(**_JIT)
+def _ball_add_into(dm, dr, df, xm, xr, xf, L):  # pragma: no cover - compiled
+    """``d = d + x`` as a ball sum (``2u |mid|``, ``1 + 8u``); a copy where ``d`` is zero."""
+    for o in range(xf.shape[0]):
+        if not xf[o]:
+            continue
+        if df[o]:
+            for x in range(L):
+                m = dm[o, x] + xm[o, x]
+                dr[o, x] = (dr[o, x] + xr[o, x] + 2 * U * abs(m)) * UP
+                dm[o, x] = m
+        else:
+            df[o] = True
+            for x in range(L):
+                dm[o, x] = xm[o, x]
+                dr[o, x] = xr[o, x]
+
+
+# ============================================================================ the recursion
+@numba.njit(**_JIT)
+def _recursion(
+    parent, revolute, axis, parts, translation, direction, gravity,
+    ptr, tj, to,
+    qm, qr, vm, vr, am, ar, gscale,
+    kind, unit, sign, pim, pir,
+    outm, outr,
+):  # fmt: skip  # pragma: no cover - compiled
+    """Joint torques ``outm, outr[b, c, p, i, o]`` of each batch element ``b`` (positions ``q``
+    (B, n, K)), column ``c`` (velocities, accelerations (B, C, n, K), gravity scale (C,)) and
+    parameter row ``p`` (``pim, pir`` (P, 10 n); per body ``kind`` 0: zero, 1: ``sign`` times
+    the unit vector ``unit``, 2: general), component ``o`` of the algebra. ``out*`` must be zero
+    on entry: entries that are structurally zero are not written."""
+    B, n, K = qm.shape
+    C = vm.shape[1]
+    P = kind.shape[0]
+    # Scratch, reused over the batch.
+    acm = np.empty((K, 60))
+    acr = np.empty((K, 60))
+    acs = np.empty((K, 60))
+    acn = np.zeros(K, np.int64)
+    acx = np.zeros(K, np.bool_)
+    Rm = np.zeros((n, K, 9))
+    Rr = np.zeros((n, K, 9))
+    Rf = np.zeros((n, K), np.bool_)
+    pm = np.zeros((n, K, 3))
+    pr = np.zeros((n, K, 3))
+    pf = np.zeros((n, K), np.bool_)
+    cm = np.zeros(K)  # cos, sin, q and d^2 of one joint
+    cr = np.zeros(K)
+    cf = np.zeros(K, np.bool_)
+    sm = np.zeros(K)
+    sr = np.zeros(K)
+    sf = np.zeros(K, np.bool_)
+    xm = np.zeros(K)
+    xr = np.zeros(K)
+    xf = np.zeros(K, np.bool_)
+    dm = np.zeros((K, 1))
+    dr = np.zeros((K, 1))
+    df = np.zeros(K, np.bool_)
+    # Per joint: vw, vl, aw, al (K, 3) and their flags.
+    Vm = np.zeros((n, 4, K, 3))
+    Vr = np.zeros((n, 4, K, 3))
+    Vf = np.zeros((n, 4, K), np.bool_)
+    zero3m = np.zeros((K, 3))
+    zero3r = np.zeros((K, 3))
+    zero3f = np.zeros(K, np.bool_)
+    gm = np.zeros((K, 3))
+    gr = np.zeros((K, 3))
+    gf = np.zeros(K, np.bool_)
+    tm = np.zeros((K, 3))  # temporaries
+    tr = np.zeros((K, 3))
+    tf = np.zeros(K, np.bool_)
+    om = np.zeros((K, 3))  # own velocity S qd
+    orr = np.zeros((K, 3))
+    of = np.zeros(K, np.bool_)
+    Swm = np.zeros((K, 9))
+    Swr = np.zeros((K, 9))
+    Swf = np.zeros(K, np.bool_)
+    Sam = np.zeros((K, 9))
+    Sar = np.zeros((K, 9))
+    Saf = np.zeros(K, np.bool_)
+    Lwm = np.zeros((K, 18))
+    Lwr = np.zeros((K, 18))
+    Lwf = np.zeros(K, np.bool_)
+    hm = np.zeros((K, 9))  # a 3x3 result
+    hr = np.zeros((K, 9))
+    hf = np.zeros(K, np.bool_)
+    im = np.zeros((K, 18))  # a 3x6 result
+    ir = np.zeros((K, 18))
+    if_ = np.zeros(K, np.bool_)
+    # The body regressor (K, 10 parameters x 6: linear then angular) and its flags.
+    Phm = np.zeros((K, 60))
+    Phr = np.zeros((K, 60))
+    Phf = np.zeros(K, np.bool_)
+    # Forces (linear, angular) per joint and parameter row.
+    Fm = np.zeros((n, P, K, 6))
+    Fr = np.zeros((n, P, K, 6))
+    Ff = np.zeros((n, P, K), np.bool_)
+    upm = np.zeros((K, 6))
+    upr = np.zeros((K, 6))
+    upf = np.zeros(K, np.bool_)
+    fum = np.zeros((K, 3))
+    fur = np.zeros((K, 3))
+    fuf = np.zeros(K, np.bool_)
+    num = np.zeros((K, 3))
+    nur = np.zeros((K, 3))
+    nuf = np.zeros(K, np.bool_)
+    # A joint axis that is +-1 along one coordinate makes S^T f a copy of that coordinate.
+    axis_unit = np.full(n, -1, np.int64)
+    axis_sign = np.ones(n)
+    for j in range(n):
+        count = 0
+        for x in range(3):
+            if axis[j, x] != 0.0:
+                count += 1
+        for x in range(3):
+            if count == 1 and abs(axis[j, x]) == 1.0:
+                axis_unit[j] = x
+                axis_sign[j] = axis[j, x]
+    half = 0.5
+    for b in range(B):
+        # ---------------------------------------------------------------- poses
+        for j in range(n):
+            for o in range(K):
+                xm[o] = qm[b, j, o]
+                xr[o] = qr[b, j, o]
+                xf[o] = xm[o] != 0.0 or xr[o] != 0.0
+            if revolute[j]:
+                x0 = xm[0]
+                r0 = xr[0]
+                c0 = math.cos(x0)
+                s0 = math.sin(x0)
+                reach = min(2.0, 0.5 * r0 * r0 * UP)
+                cm[0] = c0
+                cr[0] = min(2.0, (abs(s0) * r0 + reach) * UP) + 4 * U
+                sm[0] = s0
+                sr[0] = min(2.0, (abs(c0) * r0 + reach) * UP) + 4 * U
+                cf[0] = True
+                sf[0] = True
+                # d^2: the products of the derivative components (i, j >= 1).
+                _begin(acn, acx)
+                for i in range(1, K):
+                    if not xf[i]:
+                        continue
+                    for e in range(ptr[i], ptr[i + 1]):
+                        k = tj[e]
+                        if k == 0 or not xf[k]:
+                            continue
+                        o = to[e]
+                        _open(acm, acr, acs, acn, o, 1)
+                        acn[o] += 1
+                        acx[o] = True
+                        t = xm[i] * xm[k]
+                        acm[o, 0] += t
+                        acs[o, 0] += abs(t)
+                        acr[o, 0] += abs(xm[i]) * xr[k] + xr[i] * (abs(xm[k]) + xr[k])
+                _finish(acm, acr, acs, acn, acx, 1, dm, dr, df)
+                # cos_o = -(sin0 x_o) - (cos0 / 2) d2_o, sin_o = cos0 x_o - (sin0 / 2) d2_o.
+                for which in range(2):
+                    _begin(acn, acx)
+                    for o in range(1, K):
+                        if not (xf[o] or df[o]):
+                            continue
+                        _open(acm, acr, acs, acn, o, 1)
+                        if xf[o]:
+                            fm = -sm[0] if which == 0 else cm[0]
+                            fr = sr[0] if which == 0 else cr[0]
+                            t = fm * xm[o]
+                            acm[o, 0] += t
+                            acs[o, 0] += abs(t)
+                            acr[o, 0] += abs(fm) * xr[o] + fr * (abs(xm[o]) + xr[o])
+                            acn[o] += 1
+                            acx[o] = True
+                        if df[o]:
+                            fm = -half * cm[0] if which == 0 else -half * sm[0]
+                            fr = half * (cr[0] if which == 0 else sr[0])
+                            t = fm * dm[o, 0]
+                            acm[o, 0] += t
+                            acs[o, 0] += abs(t)
+                            acr[o, 0] += abs(fm) * dr[o, 0] + fr * (abs(dm[o, 0]) + dr[o, 0])
+                            acn[o] += 1
+                            acx[o] = True
+                    for o in range(1, K):
+                        N = acn[o]
+                        if which == 0:
+                            cf[o] = N > 0
+                        else:
+                            sf[o] = N > 0
+                        if N > 0:
+                            value = acm[o, 0]
+                            radius = (acr[o, 0] + (N + 2) * U * acs[o, 0]) * (1.0 + 2 * (N + 4) * U)
+                            if which == 0:
+                                cm[o], cr[o] = value, radius
+                            else:
+                                sm[o], sr[o] = value, radius
+                # R = A0 + cos A1 + sin A2.
+                for o in range(K):
+                    Rf[j, o] = cf[o] or sf[o] or o == 0
+                    if not Rf[j, o]:
+                        continue
+                    N = (1 if o == 0 else 0) + (1 if cf[o] else 0) + (1 if sf[o] else 0)
+                    for x in range(9):
+                        m = parts[j, 0, x] if o == 0 else 0.0
+                        s = abs(m)
+                        rr = 0.0
+                        if cf[o]:
+                            t = cm[o] * parts[j, 1, x]
+                            m += t
+                            s += abs(t)
+                            rr += cr[o] * abs(parts[j, 1, x])
+                        if sf[o]:
+                            t = sm[o] * parts[j, 2, x]
+                            m += t
+                            s += abs(t)
+                            rr += sr[o] * abs(parts[j, 2, x])
+                        Rm[j, o, x] = m
+                        Rr[j, o, x] = (rr + (N + 2) * U * s) * (1.0 + 2 * (N + 4) * U)
+                for o in range(K):
+                    pf[j, o] = o == 0
+                for x in range(3):
+                    pm[j, 0, x] = translation[j, x]
+                    pr[j, 0, x] = 0.0
+            else:
+                for o in range(K):
+                    Rf[j, o] = o == 0
+                for x in range(9):
+                    Rm[j, 0, x] = parts[j, 0, x]
+                    Rr[j, 0, x] = 0.0
+                # p = translation + direction q.
+                _begin(acn, acx)
+                acm[0, :3] = translation[j]
+                acr[0, :3] = 0.0
+                acs[0, :3] = np.abs(translation[j])
+                acn[0] = 1
+                _acc_constant_scalar(acm, acr, acs, acn, acx, direction[j], xm, xr, xf, 3)
+                _finish(acm, acr, acs, acn, acx, 3, pm[j], pr[j], pf[j])
+        # ---------------------------------------------------------------- columns
+        for c in range(C):
+            for o in range(K):
+                gf[o] = False
+            if gscale[c] != 0.0:
+                gf[0] = True
+                for x in range(3):
+                    gm[0, x] = -gscale[c] * gravity[x]
+                    gr[0, x] = 0.0
+            for j in range(n):
+                for p in range(P):
+                    for o in range(K):
+                        Ff[j, p, o] = False
+            for j in range(n):
+                par = parent[j]
+                if par < 0:
+                    vwm, vwr, vwf = zero3m, zero3r, zero3f
+                    vlm, vlr, vlf = zero3m, zero3r, zero3f
+                    awm, awr, awf = zero3m, zero3r, zero3f
+                    alm, alr, alf = gm, gr, gf
+                else:
+                    vwm, vwr, vwf = Vm[par, 0], Vr[par, 0], Vf[par, 0]
+                    vlm, vlr, vlf = Vm[par, 1], Vr[par, 1], Vf[par, 1]
+                    awm, awr, awf = Vm[par, 2], Vr[par, 2], Vf[par, 2]
+                    alm, alr, alf = Vm[par, 3], Vr[par, 3], Vf[par, 3]
+                # own = axis qd_j, and the joint's acceleration as a scalar of the algebra.
+                for o in range(K):
+                    xm[o] = vm[b, c, j, o]
+                    xr[o] = vr[b, c, j, o]
+                    xf[o] = xm[o] != 0.0 or xr[o] != 0.0
+                _begin(acn, acx)
+                _acc_constant_scalar(acm, acr, acs, acn, acx, axis[j], xm, xr, xf, 3)
+                _finish(acm, acr, acs, acn, acx, 3, om, orr, of)
+                for o in range(K):
+                    xm[o] = am[b, c, j, o]
+                    xr[o] = ar[b, c, j, o]
+                    xf[o] = xm[o] != 0.0 or xr[o] != 0.0
+                # vw' = R^T vw (+ own); vl' = R^T (vl - p x vw) (+ own).
+                _begin(acn, acx)
+                _acc_matvec(acm, acr, acs, acn, acx, Rm[j], Rr[j], Rf[j], vwm, vwr, vwf,
+                            ptr, tj, to, True)  # fmt: skip
+                if revolute[j]:
+                    _acc_ball(acm, acr, acs, acn, om, orr, of, 1.0, 3)
+                _finish(acm, acr, acs, acn, acx, 3, Vm[j, 0], Vr[j, 0], Vf[j, 0])
+                _begin(acn, acx)
+                _acc_ball(acm, acr, acs, acn, vlm, vlr, vlf, 1.0, 3)
+                _acc_cross(acm, acr, acs, acn, acx, pm[j], pr[j], pf[j], vwm, vwr, vwf, -1.0,
+                           ptr, tj, to)  # fmt: skip
+                _finish(acm, acr, acs, acn, acx, 3, tm, tr, tf)
+                _begin(acn, acx)
+                _acc_matvec(acm, acr, acs, acn, acx, Rm[j], Rr[j], Rf[j], tm, tr, tf,
+                            ptr, tj, to, True)  # fmt: skip
+                if not revolute[j]:
+                    _acc_ball(acm, acr, acs, acn, om, orr, of, 1.0, 3)
+                _finish(acm, acr, acs, acn, acx, 3, Vm[j, 1], Vr[j, 1], Vf[j, 1])
+                # aw' = R^T aw (+ axis qdd + vw' x own); al' = R^T (al - p x aw) + vl' x own
+                # (revolute) or + axis qdd + vw' x own (prismatic).
+                _begin(acn, acx)
+                _acc_matvec(acm, acr, acs, acn, acx, Rm[j], Rr[j], Rf[j], awm, awr, awf,
+                            ptr, tj, to, True)  # fmt: skip
+                if revolute[j]:
+                    _acc_constant_scalar(acm, acr, acs, acn, acx, axis[j], xm, xr, xf, 3)
+                    _acc_cross(acm, acr, acs, acn, acx, Vm[j, 0], Vr[j, 0], Vf[j, 0],
+                               om, orr, of, 1.0, ptr, tj, to)  # fmt: skip
+                _finish(acm, acr, acs, acn, acx, 3, Vm[j, 2], Vr[j, 2], Vf[j, 2])
+                _begin(acn, acx)
+                _acc_ball(acm, acr, acs, acn, alm, alr, alf, 1.0, 3)
+                _acc_cross(acm, acr, acs, acn, acx, pm[j], pr[j], pf[j], awm, awr, awf, -1.0,
+                           ptr, tj, to)  # fmt: skip
+                _finish(acm, acr, acs, acn, acx, 3, tm, tr, tf)
+                _begin(acn, acx)
+                _acc_matvec(acm, acr, acs, acn, acx, Rm[j], Rr[j], Rf[j], tm, tr, tf,
+                            ptr, tj, to, True)  # fmt: skip
+                if revolute[j]:
+                    _acc_cross(acm, acr, acs, acn, acx, Vm[j, 1], Vr[j, 1], Vf[j, 1],
+                               om, orr, of, 1.0, ptr, tj, to)  # fmt: skip
+                else:
+                    _acc_constant_scalar(acm, acr, acs, acn, acx, axis[j], xm, xr, xf, 3)
+                    _acc_cross(acm, acr, acs, acn, acx, Vm[j, 0], Vr[j, 0], Vf[j, 0],
+                               om, orr, of, 1.0, ptr, tj, to)  # fmt: skip
+                _finish(acm, acr, acs, acn, acx, 3, Vm[j, 3], Vr[j, 3], Vf[j, 3])
+                # ------------------------------------------------ the body regressor
+                wm, wr, wf = Vm[j, 0], Vr[j, 0], Vf[j, 0]
+                lm, lr, lf = Vm[j, 1], Vr[j, 1], Vf[j, 1]
+                awm, awr, awf = Vm[j, 2], Vr[j, 2], Vf[j, 2]
+                alm, alr, alf = Vm[j, 3], Vr[j, 3], Vf[j, 3]
+                for o in range(K):
+                    Phf[o] = False
+                # Row m, linear: al + w x vl.
+                _begin(acn, acx)
+                _acc_ball(acm, acr, acs, acn, alm, alr, alf, 1.0, 3)
+                _acc_cross(acm, acr, acs, acn, acx, wm, wr, wf, lm, lr, lf, 1.0, ptr, tj, to)
+                _finish(acm, acr, acs, acn, acx, 3, tm, tr, tf)
+                for o in range(K):
+                    if tf[o]:
+                        _phi_open(Phm, Phr, Phf, o)
+                        for x in range(3):
+                            Phm[o, x] = tm[o, x]
+                            Phr[o, x] = tr[o, x]
+                # Rows h, linear: S(aw) + S(w) S(w), entry (x, c) -> row 1 + c, column x.
+                _skew(wm, wr, wf, Swm, Swr, Swf)
+                _skew(awm, awr, awf, Sam, Sar, Saf)
+                _begin(acn, acx)
+                _acc_ball(acm, acr, acs, acn, Sam, Sar, Saf, 1.0, 9)
+                _acc_matmat(acm, acr, acs, acn, acx, Swm, Swr, Swf, Swm, Swr, Swf, 3,
+                            ptr, tj, to)  # fmt: skip
+                _finish(acm, acr, acs, acn, acx, 9, hm, hr, hf)
+                for o in range(K):
+                    if hf[o]:
+                        _phi_open(Phm, Phr, Phf, o)
+                        for x in range(3):
+                            for col in range(3):
+                                Phm[o, 6 * (1 + col) + x] = hm[o, 3 * x + col]
+                                Phr[o, 6 * (1 + col) + x] = hr[o, 3 * x + col]
+                # Rows h, angular: -S(al - vl x w).
+                _begin(acn, acx)
+                _acc_ball(acm, acr, acs, acn, alm, alr, alf, 1.0, 3)
+                _acc_cross(acm, acr, acs, acn, acx, lm, lr, lf, wm, wr, wf, -1.0, ptr, tj, to)
+                _finish(acm, acr, acs, acn, acx, 3, tm, tr, tf)
+                _skew(tm, tr, tf, hm, hr, hf)
+                for o in range(K):
+                    if hf[o]:
+                        _phi_open(Phm, Phr, Phf, o)
+                        for x in range(3):
+                            for col in range(3):
+                                Phm[o, 6 * (1 + col) + 3 + x] = -hm[o, 3 * x + col]
+                                Phr[o, 6 * (1 + col) + 3 + x] = hr[o, 3 * x + col]
+                # Rows iota, angular: L(aw) + S(w) L(w).
+                _inertia_map(awm, awr, awf, Lwm, Lwr, Lwf)
+                _begin(acn, acx)
+                _acc_ball(acm, acr, acs, acn, Lwm, Lwr, Lwf, 1.0, 18)
+                _inertia_map(wm, wr, wf, Lwm, Lwr, Lwf)
+                _acc_matmat(acm, acr, acs, acn, acx, Swm, Swr, Swf, Lwm, Lwr, Lwf, 6,
+                            ptr, tj, to)  # fmt: skip
+                _finish(acm, acr, acs, acn, acx, 18, im, ir, if_)
+                for o in range(K):
+                    if if_[o]:
+                        _phi_open(Phm, Phr, Phf, o)
+                        for x in range(3):
+                            for col in range(6):
+                                Phm[o, 6 * (4 + col) + 3 + x] = im[o, 6 * x + col]
+                                Phr[o, 6 * (4 + col) + 3 + x] = ir[o, 6 * x + col]
+                # ------------------------------------------------ body forces per row
+                for p in range(P):
+                    k = kind[p, j]
+                    if k == 0:
+                        continue
+                    if k == 1:
+                        t = unit[p, j]
+                        sgn = sign[p, j]
+                        for o in range(K):
+                            Ff[j, p, o] = Phf[o]
+                            if Phf[o]:
+                                for x in range(6):
+                                    Fm[j, p, o, x] = sgn * Phm[o, 6 * t + x]
+                                    Fr[j, p, o, x] = Phr[o, 6 * t + x]
+                        continue
+                    for o in range(K):
+                        Ff[j, p, o] = Phf[o]
+                        if not Phf[o]:
+                            continue
+                        for x in range(6):
+                            # Linear: rows m, h (0-3); angular: rows h, iota (1-9).
+                            first, last = (0, 4) if x < 3 else (1, 10)
+                            m = 0.0
+                            rr = 0.0
+                            s = 0.0
+                            N = 0
+                            for t in range(first, last):
+                                a = pim[p, 10 * j + t]
+                                ra = pir[p, 10 * j + t]
+                                if a == 0.0 and ra == 0.0:
+                                    continue
+                                bm = Phm[o, 6 * t + x]
+                                rb = Phr[o, 6 * t + x]
+                                v = a * bm
+                                m += v
+                                s += abs(v)
+                                rr += abs(a) * rb + ra * (abs(bm) + rb)
+                                N += 1
+                            Fm[j, p, o, x] = m
+                            Fr[j, p, o, x] = (rr + (N + 2) * U * s) * (1.0 + 2 * (N + 4) * U)
+            # ---------------------------------------------------------------- backward
+            for j in range(n - 1, -1, -1):
+                par = parent[j]
+                offset = 3 if revolute[j] else 0
+                if K == 1:  # balls: the same arithmetic, without the algebra's bookkeeping
+                    for p in range(P):
+                        if not Ff[j, p, 0]:
+                            continue
+                        if axis_unit[j] >= 0:
+                            outm[b, c, p, j, 0] = axis_sign[j] * Fm[j, p, 0, offset + axis_unit[j]]
+                            outr[b, c, p, j, 0] = Fr[j, p, 0, offset + axis_unit[j]]
+                        else:
+                            m = 0.0
+                            rr = 0.0
+                            s = 0.0
+                            for x in range(3):
+                                v = axis[j, x] * Fm[j, p, 0, offset + x]
+                                m += v
+                                s += abs(v)
+                                rr += abs(axis[j, x]) * Fr[j, p, 0, offset + x]
+                            outm[b, c, p, j, 0] = m
+                            outr[b, c, p, j, 0] = (rr + 5 * U * s) * (1.0 + 14 * U)
+                        if par >= 0:
+                            _carry_ball(
+                                Rm[j, 0], Rr[j, 0], pm[j, 0], pr[j, 0], Fm[j, p, 0], Fr[j, p, 0],
+                                Fm[par, p, 0], Fr[par, p, 0], Ff[par, p],
+                            )  # fmt: skip
+                    continue
+                for p in range(P):
+                    fmj = Fm[j, p]
+                    frj = Fr[j, p]
+                    ffj = Ff[j, p]
+                    any_ = False
+                    for o in range(K):
+                        if ffj[o]:
+                            any_ = True
+                    if not any_:
+                        continue
+                    # tau_j = S^T f.
+                    for o in range(K):
+                        if not ffj[o]:
+                            continue
+                        if axis_unit[j] >= 0:
+                            outm[b, c, p, j, o] = axis_sign[j] * fmj[o, offset + axis_unit[j]]
+                            outr[b, c, p, j, o] = frj[o, offset + axis_unit[j]]
+                        else:
+                            m = 0.0
+                            rr = 0.0
+                            s = 0.0
+                            for x in range(3):
+                                v = axis[j, x] * fmj[o, offset + x]
+                                m += v
+                                s += abs(v)
+                                rr += abs(axis[j, x]) * frj[o, offset + x]
+                            outm[b, c, p, j, o] = m
+                            outr[b, c, p, j, o] = (rr + 5 * U * s) * (1.0 + 14 * U)
+                    if par < 0:
+                        continue
+                    # f' = R f, n' = R n + p x f', added to the parent's.
+                    _begin(acn, acx)
+                    _acc_matvec(acm, acr, acs, acn, acx, Rm[j], Rr[j], Rf[j],
+                                fmj[:, 0:3], frj[:, 0:3], ffj, ptr, tj, to, False)  # fmt: skip
+                    _finish(acm, acr, acs, acn, acx, 3, fum, fur, fuf)
+                    _begin(acn, acx)
+                    _acc_matvec(acm, acr, acs, acn, acx, Rm[j], Rr[j], Rf[j],
+                                fmj[:, 3:6], frj[:, 3:6], ffj, ptr, tj, to, False)  # fmt: skip
+                    _acc_cross(acm, acr, acs, acn, acx, pm[j], pr[j], pf[j], fum, fur, fuf,
+                               1.0, ptr, tj, to)  # fmt: skip
+                    _finish(acm, acr, acs, acn, acx, 3, num, nur, nuf)
+                    for o in range(K):
+                        upf[o] = fuf[o] or nuf[o]
+                        if upf[o]:
+                            for x in range(3):
+                                upm[o, x] = fum[o, x] if fuf[o] else 0.0
+                                upr[o, x] = fur[o, x] if fuf[o] else 0.0
+                                upm[o, 3 + x] = num[o, x] if nuf[o] else 0.0
+                                upr[o, 3 + x] = nur[o, x] if nuf[o] else 0.0
+                    _ball_add_into(Fm[par, p], Fr[par, p], Ff[par, p], upm, upr, upf, 6)
+
+
+@numba.njit(**_JIT)
+def _row_times(Rm, Rr, fm, fr, offset, r):  # pragma: no cover - compiled
+    """Row ``r`` of ``R`` (9,) times ``f[offset:offset + 3]``: the sums of the midpoint products,
+    of their magnitudes and of their radii."""
+    m = 0.0
+    rr = 0.0
+    s = 0.0
+    for k in range(3):
+        a = Rm[3 * r + k]
+        ar = Rr[3 * r + k]
+        b = fm[offset + k]
+        br = fr[offset + k]
+        t = a * b
+        m += t
+        s += abs(t)
+        rr += abs(a) * br + ar * (abs(b) + br)
+    return m, s, rr
+
+
+@numba.njit(**_JIT)
+def _carry_ball(Rm, Rr, pm, pr, fm, fr, dm, dr, df):  # pragma: no cover - compiled
+    """For balls (one component): ``f' = R f``, ``n' = R n + p x f'`` added to the parent's
+    force ``d`` (flag ``df[0]``), as the general path computes them."""
+    m, s, rr = _row_times(Rm, Rr, fm, fr, 0, 0)
+    f0, g0 = m, (rr + 5 * U * s) * (1.0 + 14 * U)
+    m, s, rr = _row_times(Rm, Rr, fm, fr, 0, 1)
+    f1, g1 = m, (rr + 5 * U * s) * (1.0 + 14 * U)
+    m, s, rr = _row_times(Rm, Rr, fm, fr, 0, 2)
+    f2, g2 = m, (rr + 5 * U * s) * (1.0 + 14 * U)
+    first = not df[0]
+    df[0] = True
+    for r in range(3):
+        m, s, rr = _row_times(Rm, Rr, fm, fr, 3, r)
+        # p x f' along r: p[y] f'[z] - p[z] f'[y].
+        if r == 0:
+            py, pz, fy, fz, gy, gz = pm[1], pm[2], f1, f2, g1, g2
+            ry, rz = pr[1], pr[2]
+        elif r == 1:
+            py, pz, fy, fz, gy, gz = pm[2], pm[0], f2, f0, g2, g0
+            ry, rz = pr[2], pr[0]
+        else:
+            py, pz, fy, fz, gy, gz = pm[0], pm[1], f0, f1, g0, g1
+            ry, rz = pr[0], pr[1]
+        t1 = py * fz
+        t2 = pz * fy
+        m += t1 - t2
+        s += abs(t1) + abs(t2)
+        rr += abs(py) * gz + ry * (abs(fz) + gz) + abs(pz) * gy + rz * (abs(fy) + gy)
+        nu = m
+        nur = (rr + 7 * U * s) * (1.0 + 18 * U)
+        fu = f0 if r == 0 else (f1 if r == 1 else f2)
+        fur = g0 if r == 0 else (g1 if r == 1 else g2)
+        if first:
+            dm[r] = fu
+            dr[r] = fur
+            dm[3 + r] = nu
+            dr[3 + r] = nur
+        else:
+            m = dm[r] + fu
+            dr[r] = (dr[r] + fur + 2 * U * abs(m)) * UP
+            dm[r] = m
+            m = dm[3 + r] + nu
+            dr[3 + r] = (dr[3 + r] + nur + 2 * U * abs(m)) * UP
+            dm[3 + r] = m
+
+
+@numba.njit(**_JIT)
+def _phi_open(Phm, Phr, Phf, o):  # pragma: no cover - compiled
+    """Flag component ``o`` of the body regressor, its entries zero until written."""
+    if not Phf[o]:
+        Phf[o] = True
+        for x in range(60):
+            Phm[o, x] = 0.0
+            Phr[o, x] = 0.0
+
+
+# ============================================================================ the entry point
+def parameter_rows(mid: np.ndarray, rad: np.ndarray, dof: int):
+    """Per parameter row and body: 0 (zero), 1 (``sign`` times the unit vector ``unit``), 2."""
+    P = mid.shape[0]
+    blocks_m = mid.reshape(P, dof, 10)
+    blocks_r = rad.reshape(P, dof, 10)
+    nonzero = (blocks_m != 0) | (blocks_r != 0)
+    count = nonzero.sum(-1)
+    unit = np.argmax(nonzero, axis=-1)
+    value = np.take_along_axis(blocks_m, unit[..., None], -1)[..., 0]
+    radius = np.take_along_axis(blocks_r, unit[..., None], -1)[..., 0]
+    is_unit = (count == 1) & (np.abs(value) == 1.0) & (radius == 0.0)
+    kind = np.where(count == 0, 0, np.where(is_unit, 1, 2)).astype(np.int64)
+    sign = np.where(is_unit, value, 1.0)
+    return kind, unit.astype(np.int64), sign
+
+
+def recursion(
+    chain: Chain,
+    algebra: Algebra,
+    q: tuple[np.ndarray, np.ndarray],
+    v: tuple[np.ndarray, np.ndarray],
+    a: tuple[np.ndarray, np.ndarray],
+    gravity_scale: np.ndarray,
+    parameters: tuple[np.ndarray, np.ndarray],
+) -> tuple[np.ndarray, np.ndarray]:
+    """Joint torques ``Y(q, v_c, a_c) pi_p`` (gravity ``gravity_scale[c] g``) of each batch
+    element ``b``, column ``c`` and parameter row ``p``, in the algebra: ``q`` (mid, rad) of shape
+    (B, n, K), ``v`` and ``a`` (B, C, n, K), ``parameters`` (P, 10 n); returns (mid, rad) of
+    shape (B, C, P, n, K)."""
+    qm, qr = (np.ascontiguousarray(x, dtype=float) for x in q)
+    vm, vr = (np.ascontiguousarray(x, dtype=float) for x in v)
+    am, ar = (np.ascontiguousarray(x, dtype=float) for x in a)
+    pim, pir = (np.ascontiguousarray(x, dtype=float) for x in parameters)
+    B, n, K = qm.shape
+    C = vm.shape[1]
+    P = pim.shape[0]
+    kind, unit, sign = parameter_rows(pim, pir, n)
+    outm = np.zeros((B, C, P, n, K))
+    outr = np.zeros((B, C, P, n, K))
+    _recursion(
+        chain.parent, chain.revolute, chain.axis, chain.parts, chain.translation,
+        chain.direction, chain.gravity, algebra.ptr, algebra.tj, algebra.to,
+        qm, qr, vm, vr, am, ar, np.ascontiguousarray(gravity_scale, dtype=float),
+        kind, unit, sign, pim, pir, outm, outr,
+    )  # fmt: skip
+    return outm, outr
