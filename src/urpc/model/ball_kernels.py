@@ -383,17 +383,22 @@ def _recursion(
     parent, revolute, axis, parts, translation, direction, gravity,
     ptr, tj, to,
     qm, qr, vm, vr, am, ar, gscale,
-    kind, unit, sign, pim, pir,
+    kind, unit, sign, pim, pir, shared, own_lo, own_hi, sub_lo, sub_hi, polarize,
     outm, outr,
 ):  # fmt: skip  # pragma: no cover - compiled
-    """Joint torques ``outm, outr[b, c, p, i, o]`` of each batch element ``b`` (positions ``q``
+    """Joint torques ``outm, outr[b, c, i, o, p]`` of each batch element ``b`` (positions ``q``
     (B, n, K)), column ``c`` (velocities, accelerations (B, C, n, K), gravity scale (C,)) and
     parameter row ``p`` (``pim, pir`` (P, 10 n); per body ``kind`` 0: zero, 1: ``sign`` times
-    the unit vector ``unit``, 2: general), component ``o`` of the algebra. ``out*`` must be zero
-    on entry: entries that are structurally zero are not written."""
+    the unit vector ``unit``, 2: general), component ``o`` of the algebra. Rows ``:shared``
+    may be non-zero on any body; the others on one body each, body ``j``'s rows being
+    ``own_lo[j]:own_hi[j]`` and those of its subtree within ``sub_lo[j]:sub_hi[j]``. With
+    ``polarize``, column ``c`` of the output is ``(c - (c + C / 2)) / 4`` (ball difference, then
+    an exact scaling). ``out*`` must be zero on entry: structurally zero entries are not
+    written."""
     B, n, K = qm.shape
     C = vm.shape[1]
     P = kind.shape[0]
+    half_columns = C // 2
     # Scratch, reused over the batch.
     acm = np.empty((K, 60))
     acr = np.empty((K, 60))
@@ -453,18 +458,19 @@ def _recursion(
     Phm = np.zeros((K, 60))
     Phr = np.zeros((K, 60))
     Phf = np.zeros(K, np.bool_)
-    # Forces (linear, angular) per joint and parameter row.
-    Fm = np.zeros((n, P, K, 6))
-    Fr = np.zeros((n, P, K, 6))
-    Ff = np.zeros((n, P, K), np.bool_)
-    upm = np.zeros((K, 6))
-    upr = np.zeros((K, 6))
-    upf = np.zeros(K, np.bool_)
-    fum = np.zeros((K, 3))
-    fur = np.zeros((K, 3))
+    # Forces (linear, angular) per joint, component and parameter row (rows innermost), flagged
+    # per joint and component (a flagged block's rows outside the joint's rows stay zero).
+    Fm = np.zeros((n, K, 6, P))
+    Fr = np.zeros((n, K, 6, P))
+    Ff = np.zeros((n, K), np.bool_)
+    vacm = np.zeros((K, 3, P))
+    vacr = np.zeros((K, 3, P))
+    vacs = np.zeros((K, 3, P))
+    fum = np.zeros((K, 3, P))
+    fur = np.zeros((K, 3, P))
     fuf = np.zeros(K, np.bool_)
-    num = np.zeros((K, 3))
-    nur = np.zeros((K, 3))
+    num = np.zeros((K, 3, P))
+    nur = np.zeros((K, 3, P))
     nuf = np.zeros(K, np.bool_)
     # A joint axis that is +-1 along one coordinate makes S^T f a copy of that coordinate.
     axis_unit = np.full(n, -1, np.int64)
@@ -605,9 +611,8 @@ def _recursion(
                     gm[0, x] = -gscale[c] * gravity[x]
                     gr[0, x] = 0.0
             for j in range(n):
-                for p in range(P):
-                    for o in range(K):
-                        Ff[j, p, o] = False
+                for o in range(K):
+                    Ff[j, o] = False
             for j in range(n):
                 par = parent[j]
                 if par < 0:
@@ -738,189 +743,283 @@ def _recursion(
                                 Phm[o, 6 * (4 + col) + 3 + x] = im[o, 6 * x + col]
                                 Phr[o, 6 * (4 + col) + 3 + x] = ir[o, 6 * x + col]
                 # ------------------------------------------------ body forces per row
-                for p in range(P):
-                    k = kind[p, j]
-                    if k == 0:
+                for o in range(K):
+                    if not Phf[o] or (shared == 0 and own_lo[j] == own_hi[j]):
                         continue
-                    if k == 1:
-                        t = unit[p, j]
-                        sgn = sign[p, j]
-                        for o in range(K):
-                            Ff[j, p, o] = Phf[o]
-                            if Phf[o]:
-                                for x in range(6):
-                                    Fm[j, p, o, x] = sgn * Phm[o, 6 * t + x]
-                                    Fr[j, p, o, x] = Phr[o, 6 * t + x]
-                        continue
-                    for o in range(K):
-                        Ff[j, p, o] = Phf[o]
-                        if not Phf[o]:
-                            continue
-                        for x in range(6):
-                            # Linear: rows m, h (0-3); angular: rows h, iota (1-9).
-                            first, last = (0, 4) if x < 3 else (1, 10)
-                            m = 0.0
-                            rr = 0.0
-                            s = 0.0
-                            N = 0
-                            for t in range(first, last):
-                                a = pim[p, 10 * j + t]
-                                ra = pir[p, 10 * j + t]
-                                if a == 0.0 and ra == 0.0:
-                                    continue
-                                bm = Phm[o, 6 * t + x]
-                                rb = Phr[o, 6 * t + x]
-                                v = a * bm
-                                m += v
-                                s += abs(v)
-                                rr += abs(a) * rb + ra * (abs(bm) + rb)
-                                N += 1
-                            Fm[j, p, o, x] = m
-                            Fr[j, p, o, x] = (rr + (N + 2) * U * s) * (1.0 + 2 * (N + 4) * U)
+                    _open_block(Fm, Fr, Ff, j, o, P)
+                    _body_rows(Phm, Phr, o, j, 0, shared, kind, unit, sign, pim, pir, Fm, Fr)
+                    _body_rows(
+                        Phm, Phr, o, j, own_lo[j], own_hi[j], kind, unit, sign, pim, pir, Fm, Fr
+                    )
             # ---------------------------------------------------------------- backward
+            minus = polarize and c >= half_columns
+            column = c - half_columns if minus else c
             for j in range(n - 1, -1, -1):
+                flagged = False
+                for o in range(K):
+                    if Ff[j, o]:
+                        flagged = True
+                if not flagged:
+                    continue
                 par = parent[j]
                 offset = 3 if revolute[j] else 0
-                if K == 1:  # balls: the same arithmetic, without the algebra's bookkeeping
-                    for p in range(P):
-                        if not Ff[j, p, 0]:
-                            continue
-                        if axis_unit[j] >= 0:
-                            outm[b, c, p, j, 0] = axis_sign[j] * Fm[j, p, 0, offset + axis_unit[j]]
-                            outr[b, c, p, j, 0] = Fr[j, p, 0, offset + axis_unit[j]]
-                        else:
-                            m = 0.0
-                            rr = 0.0
-                            s = 0.0
-                            for x in range(3):
-                                v = axis[j, x] * Fm[j, p, 0, offset + x]
-                                m += v
-                                s += abs(v)
-                                rr += abs(axis[j, x]) * Fr[j, p, 0, offset + x]
-                            outm[b, c, p, j, 0] = m
-                            outr[b, c, p, j, 0] = (rr + 5 * U * s) * (1.0 + 14 * U)
-                        if par >= 0:
-                            _carry_ball(
-                                Rm[j, 0], Rr[j, 0], pm[j, 0], pr[j, 0], Fm[j, p, 0], Fr[j, p, 0],
-                                Fm[par, p, 0], Fr[par, p, 0], Ff[par, p],
-                            )  # fmt: skip
+                lo, hi = sub_lo[j], sub_hi[j]
+                # tau_j = S^T f.
+                for o in range(K):
+                    if Ff[j, o]:
+                        _torques(Fm[j, o], Fr[j, o], offset, axis_unit[j], axis_sign[j], axis[j],
+                                 shared, lo, hi, outm[b, column, j, o], outr[b, column, j, o],
+                                 minus)  # fmt: skip
+                if par < 0:
                     continue
-                for p in range(P):
-                    fmj = Fm[j, p]
-                    frj = Fr[j, p]
-                    ffj = Ff[j, p]
-                    any_ = False
-                    for o in range(K):
-                        if ffj[o]:
-                            any_ = True
-                    if not any_:
-                        continue
-                    # tau_j = S^T f.
-                    for o in range(K):
-                        if not ffj[o]:
+                # f' = R f, n' = R n + p x f', added to the parent's.
+                _begin(acn, acx)
+                _rows_matvec(vacm, vacr, vacs, acn, acx, Rm[j], Rr[j], Rf[j], Fm[j], Fr[j],
+                             Ff[j], 0, shared, lo, hi, ptr, tj, to)  # fmt: skip
+                _rows_finish(vacm, vacr, vacs, acn, acx, shared, lo, hi, fum, fur, fuf)
+                _begin(acn, acx)
+                _rows_matvec(vacm, vacr, vacs, acn, acx, Rm[j], Rr[j], Rf[j], Fm[j], Fr[j],
+                             Ff[j], 3, shared, lo, hi, ptr, tj, to)  # fmt: skip
+                _rows_cross(vacm, vacr, vacs, acn, acx, pm[j], pr[j], pf[j], fum, fur, fuf,
+                            shared, lo, hi, ptr, tj, to)  # fmt: skip
+                _rows_finish(vacm, vacr, vacs, acn, acx, shared, lo, hi, num, nur, nuf)
+                for o in range(K):
+                    for which in range(2):
+                        if which == 0 and not fuf[o] or which == 1 and not nuf[o]:
                             continue
-                        if axis_unit[j] >= 0:
-                            outm[b, c, p, j, o] = axis_sign[j] * fmj[o, offset + axis_unit[j]]
-                            outr[b, c, p, j, o] = frj[o, offset + axis_unit[j]]
+                        _open_block(Fm, Fr, Ff, par, o, P)
+                        if which == 0:
+                            _add_rows(Fm, Fr, par, o, 0, fum, fur, shared, lo, hi)
                         else:
-                            m = 0.0
-                            rr = 0.0
-                            s = 0.0
-                            for x in range(3):
-                                v = axis[j, x] * fmj[o, offset + x]
-                                m += v
-                                s += abs(v)
-                                rr += abs(axis[j, x]) * frj[o, offset + x]
-                            outm[b, c, p, j, o] = m
-                            outr[b, c, p, j, o] = (rr + 5 * U * s) * (1.0 + 14 * U)
-                    if par < 0:
-                        continue
-                    # f' = R f, n' = R n + p x f', added to the parent's.
-                    _begin(acn, acx)
-                    _acc_matvec(acm, acr, acs, acn, acx, Rm[j], Rr[j], Rf[j],
-                                fmj[:, 0:3], frj[:, 0:3], ffj, ptr, tj, to, False)  # fmt: skip
-                    _finish(acm, acr, acs, acn, acx, 3, fum, fur, fuf)
-                    _begin(acn, acx)
-                    _acc_matvec(acm, acr, acs, acn, acx, Rm[j], Rr[j], Rf[j],
-                                fmj[:, 3:6], frj[:, 3:6], ffj, ptr, tj, to, False)  # fmt: skip
-                    _acc_cross(acm, acr, acs, acn, acx, pm[j], pr[j], pf[j], fum, fur, fuf,
-                               1.0, ptr, tj, to)  # fmt: skip
-                    _finish(acm, acr, acs, acn, acx, 3, num, nur, nuf)
+                            _add_rows(Fm, Fr, par, o, 3, num, nur, shared, lo, hi)
+        if polarize:
+            for column in range(half_columns):
+                for j in range(n):
                     for o in range(K):
-                        upf[o] = fuf[o] or nuf[o]
-                        if upf[o]:
-                            for x in range(3):
-                                upm[o, x] = fum[o, x] if fuf[o] else 0.0
-                                upr[o, x] = fur[o, x] if fuf[o] else 0.0
-                                upm[o, 3 + x] = num[o, x] if nuf[o] else 0.0
-                                upr[o, 3 + x] = nur[o, x] if nuf[o] else 0.0
-                    _ball_add_into(Fm[par, p], Fr[par, p], Ff[par, p], upm, upr, upf, 6)
+                        for p in range(P):
+                            outm[b, column, j, o, p] *= 0.25
+                            outr[b, column, j, o, p] *= 0.25
 
 
 @numba.njit(**_JIT)
-def _row_times(Rm, Rr, fm, fr, offset, r):  # pragma: no cover - compiled
-    """Row ``r`` of ``R`` (9,) times ``f[offset:offset + 3]``: the sums of the midpoint products,
-    of their magnitudes and of their radii."""
-    m = 0.0
-    rr = 0.0
-    s = 0.0
-    for k in range(3):
-        a = Rm[3 * r + k]
-        ar = Rr[3 * r + k]
-        b = fm[offset + k]
-        br = fr[offset + k]
-        t = a * b
-        m += t
-        s += abs(t)
-        rr += abs(a) * br + ar * (abs(b) + br)
-    return m, s, rr
+def _open_block(Fm, Fr, Ff, j, o, P):  # pragma: no cover - compiled
+    """Flag the force block of joint ``j``, component ``o``, zero until written."""
+    if not Ff[j, o]:
+        Ff[j, o] = True
+        for x in range(6):
+            for p in range(P):
+                Fm[j, o, x, p] = 0.0
+                Fr[j, o, x, p] = 0.0
 
 
 @numba.njit(**_JIT)
-def _carry_ball(Rm, Rr, pm, pr, fm, fr, dm, dr, df):  # pragma: no cover - compiled
-    """For balls (one component): ``f' = R f``, ``n' = R n + p x f'`` added to the parent's
-    force ``d`` (flag ``df[0]``), as the general path computes them."""
-    m, s, rr = _row_times(Rm, Rr, fm, fr, 0, 0)
-    f0, g0 = m, (rr + 5 * U * s) * (1.0 + 14 * U)
-    m, s, rr = _row_times(Rm, Rr, fm, fr, 0, 1)
-    f1, g1 = m, (rr + 5 * U * s) * (1.0 + 14 * U)
-    m, s, rr = _row_times(Rm, Rr, fm, fr, 0, 2)
-    f2, g2 = m, (rr + 5 * U * s) * (1.0 + 14 * U)
-    first = not df[0]
-    df[0] = True
-    for r in range(3):
-        m, s, rr = _row_times(Rm, Rr, fm, fr, 3, r)
-        # p x f' along r: p[y] f'[z] - p[z] f'[y].
-        if r == 0:
-            py, pz, fy, fz, gy, gz = pm[1], pm[2], f1, f2, g1, g2
-            ry, rz = pr[1], pr[2]
-        elif r == 1:
-            py, pz, fy, fz, gy, gz = pm[2], pm[0], f2, f0, g2, g0
-            ry, rz = pr[2], pr[0]
-        else:
-            py, pz, fy, fz, gy, gz = pm[0], pm[1], f0, f1, g0, g1
-            ry, rz = pr[0], pr[1]
-        t1 = py * fz
-        t2 = pz * fy
-        m += t1 - t2
-        s += abs(t1) + abs(t2)
-        rr += abs(py) * gz + ry * (abs(fz) + gz) + abs(pz) * gy + rz * (abs(fy) + gy)
-        nu = m
-        nur = (rr + 7 * U * s) * (1.0 + 18 * U)
-        fu = f0 if r == 0 else (f1 if r == 1 else f2)
-        fur = g0 if r == 0 else (g1 if r == 1 else g2)
-        if first:
-            dm[r] = fu
-            dr[r] = fur
-            dm[3 + r] = nu
-            dr[3 + r] = nur
-        else:
-            m = dm[r] + fu
-            dr[r] = (dr[r] + fur + 2 * U * abs(m)) * UP
-            dm[r] = m
-            m = dm[3 + r] + nu
-            dr[3 + r] = (dr[3 + r] + nur + 2 * U * abs(m)) * UP
-            dm[3 + r] = m
+def _body_rows(Phm, Phr, o, j, lo, hi, kind, unit, sign, pim, pir, Fm, Fr):  # pragma: no cover
+    """The forces ``pi_p Phi`` of rows ``lo:hi`` on body ``j``, component ``o``."""
+    for p in range(lo, hi):
+        k = kind[p, j]
+        if k == 0:
+            continue
+        if k == 1:
+            t = unit[p, j]
+            sgn = sign[p, j]
+            for x in range(6):
+                Fm[j, o, x, p] = sgn * Phm[o, 6 * t + x]
+                Fr[j, o, x, p] = Phr[o, 6 * t + x]
+            continue
+        for x in range(6):
+            # Linear: rows m, h (0-3); angular: rows h, iota (1-9).
+            first, last = (0, 4) if x < 3 else (1, 10)
+            m = 0.0
+            rr = 0.0
+            s = 0.0
+            N = 0
+            for t in range(first, last):
+                a = pim[p, 10 * j + t]
+                ra = pir[p, 10 * j + t]
+                if a == 0.0 and ra == 0.0:
+                    continue
+                bm = Phm[o, 6 * t + x]
+                rb = Phr[o, 6 * t + x]
+                v = a * bm
+                m += v
+                s += abs(v)
+                rr += abs(a) * rb + ra * (abs(bm) + rb)
+                N += 1
+            Fm[j, o, x, p] = m
+            Fr[j, o, x, p] = (rr + (N + 2) * U * s) * (1.0 + 2 * (N + 4) * U)
+
+
+@numba.njit(**_JIT)
+def _add_rows(Fm, Fr, j, o, offset, um, ur, shared, lo, hi):  # pragma: no cover - compiled
+    """``F[j, o, offset:offset + 3] += u[o]`` over the rows, as ball sums (``2u |mid|``,
+    ``1 + 8u``); exact (a copy) where either is zero (selects, not branches)."""
+    for x in range(3):
+        for part in range(2):
+            first = 0 if part == 0 else lo
+            last = shared if part == 0 else hi
+            for p in range(first, last):
+                m = um[o, x, p]
+                r = ur[o, x, p]
+                dm = Fm[j, o, offset + x, p]
+                dr = Fr[j, o, offset + x, p]
+                total = dm + m
+                summed = (dr + r + 2 * U * abs(total)) * UP
+                radius = r if dm == 0.0 and dr == 0.0 else summed
+                Fr[j, o, offset + x, p] = dr if m == 0.0 and r == 0.0 else radius
+                Fm[j, o, offset + x, p] = total
+
+
+@numba.njit(**_JIT)
+def _torques(
+    fm, fr, offset, unit, sign, axis, shared, lo, hi, outm, outr, minus
+):  # pragma: no cover
+    """``S^T f`` of the rows of a joint's force (6, P) into ``out`` (P,): written, or
+    (``minus``) subtracted from the written ones as ball sums (exact where either is zero)."""
+    for part in range(2):
+        first = 0 if part == 0 else lo
+        last = shared if part == 0 else hi
+        for p in range(first, last):
+            if unit >= 0:
+                m = sign * fm[offset + unit, p]
+                r = fr[offset + unit, p]
+            else:
+                m = 0.0
+                r = 0.0
+                s = 0.0
+                for x in range(3):
+                    v = axis[x] * fm[offset + x, p]
+                    m += v
+                    s += abs(v)
+                    r += abs(axis[x]) * fr[offset + x, p]
+                r = (r + 5 * U * s) * (1.0 + 14 * U)
+            if not minus:
+                outm[p] = m
+                outr[p] = r
+            else:
+                e = outm[p]
+                er = outr[p]
+                d = e - m
+                summed = (er + r + 2 * U * abs(d)) * UP
+                radius = r if e == 0.0 and er == 0.0 else summed
+                outr[p] = er if m == 0.0 and r == 0.0 else radius
+                outm[p] = d
+
+
+@numba.njit(**_JIT)
+def _rows_open(acm, acr, acs, acn, o, shared, lo, hi):  # pragma: no cover - compiled
+    if acn[o] == 0:
+        for x in range(3):
+            for part in range(2):
+                first = 0 if part == 0 else lo
+                last = shared if part == 0 else hi
+                for p in range(first, last):
+                    acm[o, x, p] = 0.0
+                    acr[o, x, p] = 0.0
+                    acs[o, x, p] = 0.0
+
+
+@numba.njit(**_JIT)
+def _rows_matvec(
+    acm, acr, acs, acn, acx, Rm, Rr, Rf, Fm, Fr, Ff, offset, shared, lo, hi, ptr, tj, to
+):  # pragma: no cover - compiled
+    """``+= R f`` for the rows ``:shared`` and ``lo:hi`` of a joint's forces ``F`` (K, 6, P),
+    ``f = F[:, offset:offset + 3]``."""
+    for i in range(Rf.shape[0]):
+        if not Rf[i]:
+            continue
+        for e in range(ptr[i], ptr[i + 1]):
+            j = tj[e]
+            if not Ff[j]:
+                continue
+            o = to[e]
+            _rows_open(acm, acr, acs, acn, o, shared, lo, hi)
+            acn[o] += 3
+            acx[o] = True
+            for r in range(3):
+                a0, a1, a2 = Rm[i, 3 * r], Rm[i, 3 * r + 1], Rm[i, 3 * r + 2]
+                r0, r1, r2 = Rr[i, 3 * r], Rr[i, 3 * r + 1], Rr[i, 3 * r + 2]
+                b0, b1, b2 = abs(a0), abs(a1), abs(a2)
+                for part in range(2):
+                    first = 0 if part == 0 else lo
+                    last = shared if part == 0 else hi
+                    for p in range(first, last):
+                        x0 = Fm[j, offset, p]
+                        x1 = Fm[j, offset + 1, p]
+                        x2 = Fm[j, offset + 2, p]
+                        y0 = Fr[j, offset, p]
+                        y1 = Fr[j, offset + 1, p]
+                        y2 = Fr[j, offset + 2, p]
+                        t0 = a0 * x0
+                        t1 = a1 * x1
+                        t2 = a2 * x2
+                        acm[o, r, p] += t0 + t1 + t2
+                        acs[o, r, p] += abs(t0) + abs(t1) + abs(t2)
+                        acr[o, r, p] += (
+                            b0 * y0 + r0 * (abs(x0) + y0)
+                            + b1 * y1 + r1 * (abs(x1) + y1)
+                            + b2 * y2 + r2 * (abs(x2) + y2)
+                        )  # fmt: skip
+
+
+@numba.njit(**_JIT)
+def _rows_cross(
+    acm, acr, acs, acn, acx, pm, pr, pf, Xm, Xr, Xf, shared, lo, hi, ptr, tj, to
+):  # pragma: no cover - compiled
+    """``+= p x X`` for a 3-vector ``p`` (K, 3) and the rows of ``X`` (K, 3, P)."""
+    for i in range(pf.shape[0]):
+        if not pf[i]:
+            continue
+        for e in range(ptr[i], ptr[i + 1]):
+            j = tj[e]
+            if not Xf[j]:
+                continue
+            o = to[e]
+            _rows_open(acm, acr, acs, acn, o, shared, lo, hi)
+            acn[o] += 2
+            acx[o] = True
+            for x in range(3):
+                y = (x + 1) % 3
+                z = (x + 2) % 3
+                py, pz, ry, rz = pm[i, y], pm[i, z], pr[i, y], pr[i, z]
+                ay, az = abs(py), abs(pz)
+                for part in range(2):
+                    first = 0 if part == 0 else lo
+                    last = shared if part == 0 else hi
+                    for p in range(first, last):
+                        fz = Xm[j, z, p]
+                        fy = Xm[j, y, p]
+                        gz = Xr[j, z, p]
+                        gy = Xr[j, y, p]
+                        t1 = py * fz
+                        t2 = pz * fy
+                        acm[o, x, p] += t1 - t2
+                        acs[o, x, p] += abs(t1) + abs(t2)
+                        acr[o, x, p] += (
+                            ay * gz + ry * (abs(fz) + gz) + az * gy + rz * (abs(fy) + gy)
+                        )
+
+
+@numba.njit(**_JIT)
+def _rows_finish(acm, acr, acs, acn, acx, shared, lo, hi, outm, outr, outf):  # pragma: no cover
+    """:func:`_finish` over the rows."""
+    for o in range(acn.shape[0]):
+        N = acn[o]
+        outf[o] = N > 0
+        if N == 0:
+            continue
+        exact = N == 1 and not acx[o]
+        c = (N + 2) * U
+        F = 1.0 + 2 * (N + 4) * U
+        for x in range(3):
+            for part in range(2):
+                first = 0 if part == 0 else lo
+                last = shared if part == 0 else hi
+                for p in range(first, last):
+                    outm[o, x, p] = acm[o, x, p]
+                    if exact:
+                        outr[o, x, p] = acr[o, x, p]
+                    else:
+                        outr[o, x, p] = (acr[o, x, p] + c * acs[o, x, p]) * F
 
 
 @numba.njit(**_JIT)
@@ -958,25 +1057,70 @@ def recursion(
     a: tuple[np.ndarray, np.ndarray],
     gravity_scale: np.ndarray,
     parameters: tuple[np.ndarray, np.ndarray],
+    polarize: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Joint torques ``Y(q, v_c, a_c) pi_p`` (gravity ``gravity_scale[c] g``) of each batch
     element ``b``, column ``c`` and parameter row ``p``, in the algebra: ``q`` (mid, rad) of shape
     (B, n, K), ``v`` and ``a`` (B, C, n, K), ``parameters`` (P, 10 n); returns (mid, rad) of
-    shape (B, C, P, n, K)."""
+    shape (B, C, P, n, K). With ``polarize`` (``C`` even), the ``C / 2`` columns ``(tau_c -
+    tau_{c + C / 2}) / 4`` instead."""
     qm, qr = (np.ascontiguousarray(x, dtype=float) for x in q)
     vm, vr = (np.ascontiguousarray(x, dtype=float) for x in v)
     am, ar = (np.ascontiguousarray(x, dtype=float) for x in a)
-    pim, pir = (np.ascontiguousarray(x, dtype=float) for x in parameters)
     B, n, K = qm.shape
     C = vm.shape[1]
-    P = pim.shape[0]
+    rows, shared, own_lo, own_hi, sub_lo, sub_hi = _row_order(chain, *parameters)
+    pim = np.ascontiguousarray(parameters[0][rows], dtype=float)
+    pir = np.ascontiguousarray(parameters[1][rows], dtype=float)
     kind, unit, sign = parameter_rows(pim, pir, n)
-    outm = np.zeros((B, C, P, n, K))
-    outr = np.zeros((B, C, P, n, K))
+    columns = C // 2 if polarize else C
+    outm = np.zeros((B, columns, n, K, len(rows)))
+    outr = np.zeros((B, columns, n, K, len(rows)))
     _recursion(
         chain.parent, chain.revolute, chain.axis, chain.parts, chain.translation,
         chain.direction, chain.gravity, algebra.ptr, algebra.tj, algebra.to,
         qm, qr, vm, vr, am, ar, np.ascontiguousarray(gravity_scale, dtype=float),
-        kind, unit, sign, pim, pir, outm, outr,
+        kind, unit, sign, pim, pir, shared, own_lo, own_hi, sub_lo, sub_hi, polarize, outm, outr,
     )  # fmt: skip
-    return outm, outr
+    P = parameters[0].shape[0]
+    mid = np.zeros((B, columns, P, n, K))
+    rad = np.zeros((B, columns, P, n, K))
+    mid[:, :, rows] = np.moveaxis(outm, -1, 2)
+    rad[:, :, rows] = np.moveaxis(outr, -1, 2)
+    return mid, rad
+
+
+def _row_order(chain: Chain, mid: np.ndarray, rad: np.ndarray):
+    """The parameter rows in the kernel's order: first those non-zero on several bodies
+    (``shared`` of them), then those non-zero on one body, by body (rows zero everywhere
+    dropped); per joint the range of its own rows and of its subtree's (Pinocchio's joints are
+    in depth-first order: a subtree is a range of joints; otherwise every one-body row)."""
+    n = len(chain.parent)
+    P = mid.shape[0]
+    nonzero = ((mid != 0) | (rad != 0)).reshape(P, n, 10).any(-1)  # (P, n)
+    bodies = nonzero.sum(-1)
+    several = np.flatnonzero(bodies > 1)
+    single = np.flatnonzero(bodies == 1)
+    body = np.argmax(nonzero[single], axis=-1) if len(single) else np.zeros(0, dtype=int)
+    order = np.argsort(body, kind="stable")
+    rows = np.concatenate([several, single[order]]).astype(np.int64)
+    counts = np.bincount(body, minlength=n)
+    own_lo = (len(several) + np.concatenate([[0], np.cumsum(counts)[:-1]])).astype(np.int64)
+    own_hi = (own_lo + counts).astype(np.int64)
+    sub_lo, sub_hi = own_lo.copy(), own_hi.copy()
+    for j in range(n - 1, -1, -1):
+        descendants = [k for k in range(j + 1, n) if _ancestor(chain.parent, j, k)]
+        last = max(descendants, default=j)
+        if descendants and descendants != list(range(j + 1, last + 1)):
+            sub_lo[j], sub_hi[j] = len(several), len(rows)  # not a range: every one-body row
+        else:
+            sub_hi[j] = own_hi[last]
+    return rows, len(several), own_lo, own_hi, sub_lo, sub_hi
+
+
+def _ancestor(parent: np.ndarray, j: int, k: int) -> bool:
+    while k >= 0:
+        k = parent[k]
+        if k == j:
+            return True
+    return False

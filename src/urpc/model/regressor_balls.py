@@ -103,11 +103,13 @@ class BallRegressor:
         self.chain = _chain(self.joints, self.gravity)
 
     # ------------------------------------------------------------------ the compiled pass
-    def _run(self, q, columns, parameters) -> Ball | Jet:
+    def _run(self, q, columns, parameters, polarize: bool = False) -> Ball | Jet:
         """``Y(q, v_c, a_c) pi_p`` with gravity ``g_c g`` for each column ``(v_c, a_c, g_c)``
         and parameter row ``pi_p`` (a :class:`Ball` ``(P, 10 dof)``), over the batch of ``q``
         (balls, jets or jets of jets, ``batch + (dof,)``, the columns' broadcast to it):
-        ``batch + (C, P, dof)``, one compiled pass (:mod:`urpc.model.ball_kernels`).
+        ``batch + (C, P, dof)``, one compiled pass (:mod:`urpc.model.ball_kernels`). With
+        ``polarize``, the ``C / 2`` differences ``(tau_c - tau_{c + C / 2}) / 4`` instead (ball
+        differences, then an exact scaling).
 
         Jets whose values agree along the last batch axis (directions of one box, as in
         ``Jet(broadcast value, directions)``) are evaluated as one value with ``D`` first
@@ -152,6 +154,7 @@ class BallRegressor:
             tuple(np.stack([x[i] for x in aa], 1) for i in range(2)),
             np.array([g for _, _, g in columns], dtype=float),
             (parameters.mid, parameters.rad),
+            polarize,
         )  # (B, C, P, n, K)
         shape_out = outer + mid.shape[1:4]
         parts = [
@@ -172,11 +175,11 @@ class BallRegressor:
         )
         return Jet(value, dot)
 
-    def _columns(self, q, columns, parameters) -> Ball | Jet:
+    def _columns(self, q, columns, parameters, polarize: bool = False) -> Ball | Jet:
         """:meth:`_run`, parameters as points or a :class:`Ball`."""
         if not isinstance(parameters, Ball):
             parameters = Ball.point(np.atleast_2d(np.asarray(parameters, dtype=float)))
-        return self._run(q, columns, parameters)
+        return self._run(q, columns, parameters, polarize)
 
     # ------------------------------------------------------------------ the methods
     def evaluate(self, q, v, a, gravity_scale: float = 1.0):
@@ -203,8 +206,8 @@ class BallRegressor:
             (qd + qd_a, qdd_a.scaled(2.0), 2.0),
             (qd - qd_a, qdd_a.scaled(-2.0), -2.0),
         ]
-        Y = self._run(q, columns, identity)  # batch + (2, 10 dof, dof)
-        return transposed(Y[..., 0, :, :] - Y[..., 1, :, :]).scaled(0.25)
+        Y = self._run(q, columns, identity, polarize=True)  # batch + (1, 10 dof, dof)
+        return transposed(Y[..., 0, :, :])
 
     def mass_matrices(self, q, parameters):
         """``M(q)`` of each model (rows of ``parameters``, armature excluded) over the boxes of
@@ -274,9 +277,8 @@ class BallRegressor:
         eye = np.eye(n)
         columns = [(qd + Ball.point(eye[j]), zero, 0.0) for j in range(n)]
         columns += [(qd - Ball.point(eye[j]), zero, 0.0) for j in range(n)]
-        values = self._columns(q, columns, parameters)  # (..., 2 dof, P, i)
-        plus, minus = values[..., :n, :, :], values[..., n:, :, :]
-        return (plus - minus).scaled(0.25).map(lambda x: np.moveaxis(x, -3, -1))
+        values = self._columns(q, columns, parameters, polarize=True)  # (..., j, P, i)
+        return values.map(lambda x: np.moveaxis(x, -3, -1))
 
     def christoffel_matrices(self, q, parameters):
         """``C(q; e_k)`` for every unit velocity ``e_k`` and each model over the boxes of ``q``:
@@ -288,7 +290,6 @@ class BallRegressor:
         n = self.dof
         batch = q.shape[:-1]
         first, second = np.triu_indices(n)
-        pairs = len(first)
         eye = np.eye(n)
         zero = Ball.point(np.zeros(n))
         columns = [
@@ -297,8 +298,7 @@ class BallRegressor:
         columns += [
             (Ball.point(eye[k] - eye[i]), zero, 0.0) for k, i in zip(first, second, strict=True)
         ]
-        values = self._columns(q, columns, parameters)  # batch + (2 pairs, P, rows)
-        values = (values[..., :pairs, :, :] - values[..., pairs:, :, :]).scaled(0.25)
+        values = self._columns(q, columns, parameters, polarize=True)  # batch + (pairs, P, rows)
         models = values.mid.shape[-2]
         shape = batch + (n, models, n, n)
         mid, rad = np.zeros(shape), np.zeros(shape)
