@@ -773,6 +773,11 @@ def _recursion(
                 if par < 0:
                     continue
                 # f' = R f, n' = R n + p x f', added to the parent's.
+                if K == 1:  # balls: one fused loop over the rows, same arithmetic
+                    _open_block(Fm, Fr, Ff, par, 0, P)
+                    _carry_rows(Rm[j, 0], Rr[j, 0], pm[j, 0], pr[j, 0], Fm[j, 0], Fr[j, 0],
+                                Fm[par, 0], Fr[par, 0], shared, lo, hi)  # fmt: skip
+                    continue
                 _begin(acn, acx)
                 _rows_matvec(vacm, vacr, vacs, acn, acx, Rm[j], Rr[j], Rf[j], Fm[j], Fr[j],
                              Ff[j], 0, shared, lo, hi, ptr, tj, to)  # fmt: skip
@@ -867,6 +872,108 @@ def _add_rows(Fm, Fr, j, o, offset, um, ur, shared, lo, hi):  # pragma: no cover
                 radius = r if dm == 0.0 and dr == 0.0 else summed
                 Fr[j, o, offset + x, p] = dr if m == 0.0 and r == 0.0 else radius
                 Fm[j, o, offset + x, p] = total
+
+
+@numba.njit(**_JIT)
+def _carry_rows(Rm, Rr, pm, pr, fm, fr, dm, dr, shared, lo, hi):  # pragma: no cover - compiled
+    """For balls (one component), row by row: ``f' = R f``, ``n' = R n + p x f'`` (the sums
+    of :func:`_rows_matvec`, :func:`_rows_cross` and :func:`_rows_finish`, in the same order)
+    added to the parent's force ``d`` (6, P) as :func:`_add_rows` does."""
+    a00, a01, a02, a10, a11, a12, a20, a21, a22 = (
+        Rm[0],
+        Rm[1],
+        Rm[2],
+        Rm[3],
+        Rm[4],
+        Rm[5],
+        Rm[6],
+        Rm[7],
+        Rm[8],
+    )
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
+        Rr[0],
+        Rr[1],
+        Rr[2],
+        Rr[3],
+        Rr[4],
+        Rr[5],
+        Rr[6],
+        Rr[7],
+        Rr[8],
+    )
+    p0, p1, p2 = pm[0], pm[1], pm[2]
+    q0, q1, q2 = pr[0], pr[1], pr[2]
+    c3, F3 = 5 * U, 1.0 + 14 * U
+    c5, F5 = 7 * U, 1.0 + 18 * U
+    for part in range(2):
+        first = 0 if part == 0 else lo
+        last = shared if part == 0 else hi
+        for p in range(first, last):
+            x0, x1, x2 = fm[0, p], fm[1, p], fm[2, p]
+            y0, y1, y2 = fr[0, p], fr[1, p], fr[2, p]
+            # f' = R f.
+            u0, v0, w0 = _dot3(a00, a01, a02, r00, r01, r02, x0, x1, x2, y0, y1, y2)
+            u1, v1, w1 = _dot3(a10, a11, a12, r10, r11, r12, x0, x1, x2, y0, y1, y2)
+            u2, v2, w2 = _dot3(a20, a21, a22, r20, r21, r22, x0, x1, x2, y0, y1, y2)
+            g0 = (w0 + c3 * v0) * F3
+            g1 = (w1 + c3 * v1) * F3
+            g2 = (w2 + c3 * v2) * F3
+            # n' = R n + p x f'.
+            x0, x1, x2 = fm[3, p], fm[4, p], fm[5, p]
+            y0, y1, y2 = fr[3, p], fr[4, p], fr[5, p]
+            m0, s0, e0 = _dot3(a00, a01, a02, r00, r01, r02, x0, x1, x2, y0, y1, y2)
+            m1, s1, e1 = _dot3(a10, a11, a12, r10, r11, r12, x0, x1, x2, y0, y1, y2)
+            m2, s2, e2 = _dot3(a20, a21, a22, r20, r21, r22, x0, x1, x2, y0, y1, y2)
+            m0, s0, e0 = _cross_term(m0, s0, e0, p1, p2, q1, q2, u2, u1, g2, g1)
+            m1, s1, e1 = _cross_term(m1, s1, e1, p2, p0, q2, q0, u0, u2, g0, g2)
+            m2, s2, e2 = _cross_term(m2, s2, e2, p0, p1, q0, q1, u1, u0, g1, g0)
+            _add_one(dm, dr, 0, p, u0, g0)
+            _add_one(dm, dr, 1, p, u1, g1)
+            _add_one(dm, dr, 2, p, u2, g2)
+            _add_one(dm, dr, 3, p, m0, (e0 + c5 * s0) * F5)
+            _add_one(dm, dr, 4, p, m1, (e1 + c5 * s1) * F5)
+            _add_one(dm, dr, 5, p, m2, (e2 + c5 * s2) * F5)
+
+
+@numba.njit(**_JIT, inline="always")
+def _dot3(a0, a1, a2, r0, r1, r2, x0, x1, x2, y0, y1, y2):  # pragma: no cover - compiled
+    """A row of a ball matrix times a ball 3-vector: the sums of the midpoint products, of
+    their magnitudes and of their radii (as in :func:`_rows_matvec`)."""
+    t0 = a0 * x0
+    t1 = a1 * x1
+    t2 = a2 * x2
+    m = t0 + t1 + t2
+    s = abs(t0) + abs(t1) + abs(t2)
+    e = (
+        abs(a0) * y0 + r0 * (abs(x0) + y0)
+        + abs(a1) * y1 + r1 * (abs(x1) + y1)
+        + abs(a2) * y2 + r2 * (abs(x2) + y2)
+    )  # fmt: skip
+    return m, s, e
+
+
+@numba.njit(**_JIT, inline="always")
+def _cross_term(m, s, e, py, pz, ry, rz, fz, fy, gz, gy):  # pragma: no cover - compiled
+    """``+ (p_y f_z - p_z f_y)`` added to the sums (as in :func:`_rows_cross`)."""
+    t1 = py * fz
+    t2 = pz * fy
+    return (
+        m + (t1 - t2),
+        s + (abs(t1) + abs(t2)),
+        e + (abs(py) * gz + ry * (abs(fz) + gz) + abs(pz) * gy + rz * (abs(fy) + gy)),
+    )
+
+
+@numba.njit(**_JIT, inline="always")
+def _add_one(dm, dr, x, p, m, r):  # pragma: no cover - compiled
+    """``d[x, p] += (m, r)`` as :func:`_add_rows` does."""
+    em = dm[x, p]
+    er = dr[x, p]
+    total = em + m
+    summed = (er + r + 2 * U * abs(total)) * UP
+    radius = r if em == 0.0 and er == 0.0 else summed
+    dr[x, p] = er if m == 0.0 and r == 0.0 else radius
+    dm[x, p] = total
 
 
 @numba.njit(**_JIT)
