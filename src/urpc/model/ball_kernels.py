@@ -1165,12 +1165,14 @@ def recursion(
     gravity_scale: np.ndarray,
     parameters: tuple[np.ndarray, np.ndarray],
     polarize: bool = False,
-) -> tuple[np.ndarray, np.ndarray]:
+    raw: bool = False,
+):
     """Joint torques ``Y(q, v_c, a_c) pi_p`` (gravity ``gravity_scale[c] g``) of each batch
     element ``b``, column ``c`` and parameter row ``p``, in the algebra: ``q`` (mid, rad) of shape
     (B, n, K), ``v`` and ``a`` (B, C, n, K), ``parameters`` (P, 10 n); returns (mid, rad) of
-    shape (B, C, P, n, K). With ``polarize`` (``C`` even), the ``C / 2`` columns ``(tau_c -
-    tau_{c + C / 2}) / 4`` instead."""
+    shape (B, C, P, n, K) (views of the kernel's output when the rows keep their order). With
+    ``polarize`` (``C`` even), the ``C / 2`` columns ``(tau_c - tau_{c + C / 2}) / 4``
+    instead. ``raw``: the kernel's output (B, C, n, K, P') and the rows it holds, instead."""
     qm, qr = (np.ascontiguousarray(x, dtype=float) for x in q)
     vm, vr = (np.ascontiguousarray(x, dtype=float) for x in v)
     am, ar = (np.ascontiguousarray(x, dtype=float) for x in a)
@@ -1190,6 +1192,10 @@ def recursion(
         kind, unit, sign, pim, pir, shared, own_lo, own_hi, sub_lo, sub_hi, polarize, outm, outr,
     )  # fmt: skip
     P = parameters[0].shape[0]
+    if raw:
+        return outm, outr, rows
+    if len(rows) == P and np.array_equal(rows, np.arange(P)):
+        return np.moveaxis(outm, -1, 2), np.moveaxis(outr, -1, 2)  # views
     mid = np.zeros((B, columns, P, n, K))
     rad = np.zeros((B, columns, P, n, K))
     mid[:, :, rows] = np.moveaxis(outm, -1, 2)
@@ -1231,3 +1237,28 @@ def _ancestor(parent: np.ndarray, j: int, k: int) -> bool:
         if k == j:
             return True
     return False
+
+
+@numba.njit(**_JIT)
+def pair_scatter(values, first, second, rows, P):  # pragma: no cover - compiled
+    """The symmetric ``(B, n, P, n, n)`` array ``out[b, k, rows[q], r, i] = out[b, i, rows[q],
+    r, k] = values[b, c, r, 0, q]`` of the pairs ``c = (first[c], second[c])`` of a kernel's
+    output (B, pairs, n, 1, P') (the Christoffel matrices: column ``i`` of ``C(q; e_k)`` is column
+    ``k`` of ``C(q; e_i)``), zero on the rows not in ``rows``; written in its own order."""
+    B, pairs, n = values.shape[0], values.shape[1], values.shape[2]
+    pair = np.zeros((n, n), np.int64)
+    for c in range(pairs):
+        pair[first[c], second[c]] = c
+        pair[second[c], first[c]] = c
+    source = np.full(P, -1, np.int64)
+    for q in range(rows.shape[0]):
+        source[rows[q]] = q
+    out = np.empty((B, n, P, n, n))
+    for b in range(B):
+        for k in range(n):
+            for p in range(P):
+                q = source[p]
+                for r in range(n):
+                    for i in range(n):
+                        out[b, k, p, r, i] = 0.0 if q < 0 else values[b, pair[k, i], r, 0, q]
+    return out

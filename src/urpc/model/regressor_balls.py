@@ -298,14 +298,31 @@ class BallRegressor:
         columns += [
             (Ball.point(eye[k] - eye[i]), zero, 0.0) for k, i in zip(first, second, strict=True)
         ]
-        values = self._columns(q, columns, parameters, polarize=True)  # batch + (pairs, P, rows)
-        models = values.mid.shape[-2]
+        if isinstance(q, Jet):
+            values = self._columns(q, columns, parameters, polarize=True)  # batch + (pairs, P, i)
+            models = values.mid.shape[-2]
+            shape = batch + (n, models, n, n)
+            mid, rad = np.zeros(shape), np.zeros(shape)
+            for source, out in ((values.mid, mid), (values.rad, rad)):
+                out[..., first, :, :, second] = np.moveaxis(source, -3, 0)
+                out[..., second, :, :, first] = np.moveaxis(source, -3, 0)
+            return Ball(mid, rad)
+        if not isinstance(parameters, Ball):
+            parameters = Ball.point(np.atleast_2d(np.asarray(parameters, dtype=float)))
+        B = int(np.prod(batch, dtype=int))
+        velocities = np.stack([column[0].mid for column in columns])  # (C, n), points
+        v = np.broadcast_to(velocities[None, :, :, None], (B, len(columns), n, 1))
+        outm, outr, rows = kernels.recursion(
+            self.chain, kernels.first_order(0), _stacked([q], batch, n), (v, np.zeros_like(v)),
+            (np.zeros_like(v), np.zeros_like(v)), np.zeros(len(columns)),
+            (parameters.mid, parameters.rad), polarize=True, raw=True,
+        )  # fmt: skip
+        models = parameters.mid.shape[0]
         shape = batch + (n, models, n, n)
-        mid, rad = np.zeros(shape), np.zeros(shape)
-        for source, out in ((values.mid, mid), (values.rad, rad)):
-            out[..., first, :, :, second] = np.moveaxis(source, -3, 0)
-            out[..., second, :, :, first] = np.moveaxis(source, -3, 0)
-        return Ball(mid, rad)
+        return Ball(
+            kernels.pair_scatter(outm, first, second, rows, models).reshape(shape),
+            kernels.pair_scatter(outr, first, second, rows, models).reshape(shape),
+        )
 
 
 def parameters_of(robot: Robot) -> np.ndarray:
