@@ -33,8 +33,10 @@ path, in any summation order; ``N u`` is tiny), and the radius, a sum of non-neg
 at most ``N + 4`` roundings deep (three in a product's radius, ``N - 1`` additions, the rounding
 term, the inflation), is computed at least ``(1 - u)^(N + 4)`` times its exact value, which the
 factor ``1 + 2 (N + 4) u`` more than makes up. A lone ball term, or a term scaled by ``0``,
-``1`` or ``-1``, is copied exactly. Adding a child's force to its parent's is a ball sum as in
-:mod:`urpc.model.ball_arithmetic` (``2u |mid|``, inflated by ``1 + 8u``). ``cos``/``sin`` of a
+``1`` or ``-1``, is copied exactly. Adding a child's force to its parent's, and the polarization
+``(tau+ - tau-) / 4`` of the Christoffel, Coriolis and Slotine-Li columns, are ball sums as in
+:mod:`urpc.model.ball_arithmetic` (``2u |mid|``, inflated by ``1 + 8u``), or copies where one
+operand is exactly zero; the scaling by ``1/4`` is exact. ``cos``/``sin`` of a
 ball ``[x - r, x + r]`` are ``cos x +- (|sin x| r + r^2 / 2)`` plus 2 ulps for the library's
 rounding (as :func:`urpc.model.ball_arithmetic.cos_sin`). Compiled with numba: IEEE arithmetic,
 no fast-math, so the compiler neither reassociates nor contracts the operations the analysis

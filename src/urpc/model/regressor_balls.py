@@ -11,15 +11,24 @@ input point of its box. A :class:`Jet` carries a ball and a ball of its time der
 same recursion (forward-mode differentiation), so that ``d/dt Y(q(t), v(t), a(t))`` is enclosed
 over a box of states *and* of their rates.
 
-Rounding: each elementary operation returns the floating-point result of the midpoints and adds
-to the radius a bound of its rounding error (``2u |result|`` for a sum or product, ``(k + 2) u``
-times the sum of the magnitudes for a ``k``-term dot product, ``u = 2^-53``), and the radius
-itself is computed with its terms inflated by ``1 + 8u`` (so that rounding the radius down cannot
-shrink it). ``sin``/``cos`` of a ball ``[x - r, x + r]`` are ``cos x +- (|sin x| r + r^2 / 2)``
+The recursion runs as one compiled pass over the batch (:mod:`urpc.model.ball_kernels`): the
+poses once per box, shared by the columns of a mass or Christoffel matrix, every column's forward
+pass, body regressor and backward pass with the parameter rows carried together; exactly-zero
+vectors (zero velocities, unit accelerations and parameter directions below their body) are
+skipped, which is exact. Jets (and jets of jets) are elements of a truncated Taylor algebra;
+several directions of one box share its value, and the second derivatives of ``M`` are
+evaluated all at once (value, gradient and Hessian) with the very terms of the hyper-dual numbers.
+
+Rounding (:mod:`urpc.model.ball_kernels` has the analysis): each ball of the recursion is a sum of
+``N`` terms, balls or products of two balls, whose midpoint is the floating-point sum and whose
+radius adds the terms' radii and ``(N + 2) u`` times the sum of the terms' magnitudes, the radius
+inflated by ``1 + 2 (N + 4) u`` (``u = 2^-53``) so that rounding it cannot shrink it; ball sums
+(a child's force added to its parent's, the polarizations) add ``2u |result|`` and are inflated by
+``1 + 8u``. ``sin``/``cos`` of a ball ``[x - r, x + r]`` are ``cos x +- (|sin x| r + r^2 / 2)``
 (Taylor with remainder) plus 2 ulps for the library's rounding. The model's constants (joint
 placements, axes) are taken as exact: the enclosure is of the model as Pinocchio holds it.
 
-Checked in ``tests/test_regressor_balls.py``: at zero radius the midpoint equals Pinocchio's
+Checked in ``tests/test_regressor_balls.py`` and ``tests/test_ball_kernels.py``: at zero radius the midpoint equals Pinocchio's
 regressor, mass matrix and inverse dynamics to rounding and the radius covers the difference; over
 random boxes the enclosures hold every Pinocchio evaluation at points drawn in the box, and the
 enclosed derivatives hold finite differences of Pinocchio along random curves through the box.
