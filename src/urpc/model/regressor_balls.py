@@ -11,15 +11,24 @@ input point of its box. A :class:`Jet` carries a ball and a ball of its time der
 same recursion (forward-mode differentiation), so that ``d/dt Y(q(t), v(t), a(t))`` is enclosed
 over a box of states *and* of their rates.
 
-Rounding: each elementary operation returns the floating-point result of the midpoints and adds
-to the radius a bound of its rounding error (``2u |result|`` for a sum or product, ``(k + 2) u``
-times the sum of the magnitudes for a ``k``-term dot product, ``u = 2^-53``), and the radius
-itself is computed with its terms inflated by ``1 + 8u`` (so that rounding the radius down cannot
-shrink it). ``sin``/``cos`` of a ball ``[x - r, x + r]`` are ``cos x +- (|sin x| r + r^2 / 2)``
+The recursion runs as one compiled pass over the batch (:mod:`urpc.model.ball_kernels`): the
+poses once per box, shared by the columns of a mass or Christoffel matrix, every column's forward
+pass, body regressor and backward pass with the parameter rows carried together; exactly-zero
+vectors (zero velocities, unit accelerations and parameter directions below their body) are
+skipped, which is exact. Jets (and jets of jets) are elements of a truncated Taylor algebra;
+several directions of one box share its value, and the second derivatives of ``M`` are
+evaluated all at once (value, gradient and Hessian) with the very terms of the hyper-dual numbers.
+
+Rounding (:mod:`urpc.model.ball_kernels` has the analysis): each ball of the recursion is a sum of
+``N`` terms, balls or products of two balls, whose midpoint is the floating-point sum and whose
+radius adds the terms' radii and ``(N + 2) u`` times the sum of the terms' magnitudes, the radius
+inflated by ``1 + 2 (N + 4) u`` (``u = 2^-53``) so that rounding it cannot shrink it; ball sums
+(a child's force added to its parent's, the polarizations) add ``2u |result|`` and are inflated by
+``1 + 8u``. ``sin``/``cos`` of a ball ``[x - r, x + r]`` are ``cos x +- (|sin x| r + r^2 / 2)``
 (Taylor with remainder) plus 2 ulps for the library's rounding. The model's constants (joint
 placements, axes) are taken as exact: the enclosure is of the model as Pinocchio holds it.
 
-Checked in ``tests/test_regressor_balls.py``: at zero radius the midpoint equals Pinocchio's
+Checked in ``tests/test_regressor_balls.py`` and ``tests/test_ball_kernels.py``: at zero radius the midpoint equals Pinocchio's
 regressor, mass matrix and inverse dynamics to rounding and the radius covers the difference; over
 random boxes the enclosures hold every Pinocchio evaluation at points drawn in the box, and the
 enclosed derivatives hold finite differences of Pinocchio along random curves through the box.
@@ -33,20 +42,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UrpcError
-from .ball_arithmetic import (
-    Ball,
-    Jet,
-    concatenate,
-    cos_sin,
-    cross,
-    intersect_symmetric,
-    matmul,
-    matvec,
-    skew,
-    stack,
-    transposed,
-    zeros,
-)
+from . import ball_kernels as kernels
+from .ball_arithmetic import Ball, Jet, intersect_symmetric, matvec, transposed
 from .robot import Robot
 
 __all__ = ["Ball", "BallRegressor", "Jet", "matvec", "parameters_of"]
@@ -112,199 +109,229 @@ class BallRegressor:
                 )
             )
         self.joints = tuple(joints)
+        self.chain = _chain(self.joints, self.gravity)
 
-    def _constant(self, value: np.ndarray, batch: tuple[int, ...]) -> Ball:
-        return Ball.point(np.broadcast_to(value, batch + value.shape))
+    # ------------------------------------------------------------------ the compiled pass
+    def _run(self, q, columns, parameters, polarize: bool = False) -> Ball | Jet:
+        """``Y(q, v_c, a_c) pi_p`` with gravity ``g_c g`` for each column ``(v_c, a_c, g_c)``
+        and parameter row ``pi_p`` (a :class:`Ball` ``(P, 10 dof)``), over the batch of ``q``
+        (balls, jets or jets of jets, ``batch + (dof,)``, the columns' broadcast to it):
+        ``batch + (C, P, dof)``, one compiled pass (:mod:`urpc.model.ball_kernels`). With
+        ``polarize``, the ``C / 2`` differences ``(tau_c - tau_{c + C / 2}) / 4`` instead (ball
+        differences, then an exact scaling).
 
-    def _placements(self, q) -> list[tuple]:
-        """Per joint, the pose ``(R, p)`` of its frame in the parent's, over the batch."""
-        batch = q.shape[:-1]
-        poses = []
-        for k, joint in enumerate(self.joints):
-            angle = q[..., k]
-            if joint.revolute:
-                A0, A1, A2 = (self._constant(A, batch) for A in joint.parts)
-                c, s = cos_sin(angle.map(lambda a: a[..., None, None]))
-                R = A0 + c * A1 + s * A2
-                p = self._constant(joint.translation, batch)
-            else:
-                R = self._constant(joint.rotation, batch)
-                direction = self._constant(joint.rotation @ joint.axis, batch)
-                p = self._constant(joint.translation, batch) + direction * angle.map(
-                    lambda a: a[..., None]
-                )
-            poses.append((R, p))
-        return poses
+        Jets whose values agree along the last batch axis (directions of one box, as in
+        ``Jet(broadcast value, directions)``) are evaluated as one value with ``D`` first
+        derivatives: the value is computed once, the derivatives as they would be alone."""
+        n = self.dof
+        inputs = [q] + [x for v, a, _ in columns for x in (v, a)]
+        shape = np.broadcast_shapes(*(_shape(x) for x in inputs))
+        inputs = [_broadcast(x, shape) for x in inputs]
+        depth = max(_depth(x) for x in inputs)
+        batch = shape[:-1]
+        shared = (
+            depth == 1
+            and len(batch) >= 1
+            and batch[-1] > 1
+            and all(_constant_along(x, -2) for x in inputs)
+        )
+        if shared:
+            directions = batch[-1]
+            algebra = kernels.first_order(directions)
+            outer = batch[:-1]
 
-    def _forward(self, q, v, a, gravity_scale: float):
-        """Poses, spatial velocities and accelerations (gravity as a base acceleration)."""
-        batch = q.shape[:-1]
-        poses = self._placements(q)
-        zero3 = zeros(batch + (3,))
-        gravity = self._constant(-gravity_scale * self.gravity, batch)
-        velocities, accelerations = [], []
-        for k, joint in enumerate(self.joints):
-            R, p = poses[k]
-            if joint.parent < 0:
-                vl, vw, al, aw = zero3, zero3, gravity, zero3
-            else:
-                vl, vw = velocities[joint.parent]
-                al, aw = accelerations[joint.parent]
-            # actInv: x' = R^T x (angular), l' = R^T (l - p x w) (linear).
-            Rt = transposed(R)
-            vw_, vl_ = matvec(Rt, vw), matvec(Rt, vl - cross(p, vw))
-            aw_, al_ = matvec(Rt, aw), matvec(Rt, al - cross(p, aw))
-            axis = self._constant(joint.axis, batch)
-            own = axis * v[..., k : k + 1]  # S qd, in the joint's own frame
-            if joint.revolute:
-                vw_ = vw_ + own
-                # a += v x (S qd): angular part w x own, linear part l x own.
-                aw_ = aw_ + axis * a[..., k : k + 1] + cross(vw_, own)
-                al_ = al_ + cross(vl_, own)
-            else:
-                vl_ = vl_ + own
-                al_ = al_ + axis * a[..., k : k + 1] + cross(vw_, own)
-            velocities.append((vl_, vw_))
-            accelerations.append((al_, aw_))
-        return poses, velocities, accelerations
+            def arrays(x):
+                x = Jet.of(x)
+                parts = [x.val[..., 0, :]] + [x.dot[..., d, :] for d in range(directions)]
+                return _stacked(parts, outer, n)
 
-    def _backward(self, poses, force: list):
-        """Joint torques ``S_k^T f_k`` of per-joint blocks of force rows ``(..., rows, 3)``
-        carried to the root: ``(..., rows, dof)``."""
-        torques = [None] * self.dof
-        for k in reversed(range(self.dof)):
-            joint = self.joints[k]
-            f, m = force[k]
-            batch = f.shape[:-2]
-            axis = self._constant(joint.axis, batch)
-            torques[k] = matvec(m if joint.revolute else f, axis)
-            if joint.parent >= 0:
-                R, p = poses[k]
-                # Rows are force vectors: f' = f R^T, m' = m R^T + (p x f') = m R^T - f' S(p).
-                Rt = transposed(R)
-                f_up = matmul(f, Rt)
-                m_up = matmul(m, Rt) - matmul(f_up, skew(p))
-                pf, pm = force[joint.parent]
-                force[joint.parent] = (pf + f_up, pm + m_up)
-        return stack(torques, -1)
+        else:
+            algebra = (kernels.first_order(0), kernels.first_order(1), kernels.hyper_dual())[depth]
+            outer = batch
 
+            def arrays(x):
+                return _stacked(_components(x, depth), outer, n)
+
+        qa = arrays(inputs[0])
+        va = [arrays(x) for x in inputs[1::2]]
+        aa = [arrays(x) for x in inputs[2::2]]
+        mid, rad = kernels.recursion(
+            self.chain,
+            algebra,
+            qa,
+            tuple(np.stack([x[i] for x in va], 1) for i in range(2)),
+            tuple(np.stack([x[i] for x in aa], 1) for i in range(2)),
+            np.array([g for _, _, g in columns], dtype=float),
+            (parameters.mid, parameters.rad),
+            polarize,
+        )  # (B, C, P, n, K)
+        shape_out = outer + mid.shape[1:4]
+        parts = [
+            Ball(mid[..., o].reshape(shape_out), rad[..., o].reshape(shape_out))
+            for o in range(algebra.components)
+        ]
+        if not shared:
+            return _assemble(parts, depth)
+        # The value for every direction, and the derivatives along the directions' axis.
+        value = parts[0].map(
+            lambda x: np.ascontiguousarray(
+                np.broadcast_to(x[..., None, :, :, :], outer + (directions,) + x.shape[-3:])
+            )
+        )
+        dot = Ball(
+            np.stack([p.mid for p in parts[1:]], len(outer)),
+            np.stack([p.rad for p in parts[1:]], len(outer)),
+        )
+        return Jet(value, dot)
+
+    def _columns(self, q, columns, parameters, polarize: bool = False) -> Ball | Jet:
+        """:meth:`_run`, parameters as points or a :class:`Ball`."""
+        if not isinstance(parameters, Ball):
+            parameters = Ball.point(np.atleast_2d(np.asarray(parameters, dtype=float)))
+        return self._run(q, columns, parameters, polarize)
+
+    # ------------------------------------------------------------------ the methods
     def evaluate(self, q, v, a, gravity_scale: float = 1.0):
         """``Y(q, v, a)`` with gravity ``gravity_scale * g``: shape ``batch + (dof, 10 dof)``.
 
         ``q``, ``v``, ``a``: balls or jets of shape ``batch + (dof,)`` [rad, rad/s, rad/s^2]."""
-        n = self.dof
-        poses, velocities, accelerations = self._forward(q, v, a, gravity_scale)
-        force = []
-        for k in range(n):
-            lin, ang = _body_regressor(*velocities[k], *accelerations[k])  # (..., 10, 3)
-            batch = lin.shape[:-2]
-            before, after = zeros(batch + (10 * k, 3)), zeros(batch + (10 * (n - k - 1), 3))
-            force.append(
-                (concatenate([before, lin, after], -2), concatenate([before, ang, after], -2))
-            )
-        return transposed(self._backward(poses, force))
+        identity = Ball.point(np.eye(10 * self.dof))
+        Y = self._run(q, [(v, a, gravity_scale)], identity)  # batch + (1, 10 dof, dof)
+        return transposed(Y[..., 0, :, :])
 
     def torques(self, q, v, a, parameters, gravity_scale: float = 1.0):
         """``Y(q, v, a) pi`` for each row ``pi`` of ``parameters`` ``(P, 10 dof)`` (an array of
         points, or a :class:`Ball` of parameter intervals): the inverse dynamics of ``P`` models
         at once, shape ``batch + (P, dof)``. Cheaper than :meth:`evaluate` times ``pi``: forces
         are carried as 3-vectors, not as regressor blocks."""
-        if not isinstance(parameters, Ball):
-            parameters = Ball.point(np.atleast_2d(np.asarray(parameters, dtype=float)))
-        poses, velocities, accelerations = self._forward(q, v, a, gravity_scale)
-        force = []
-        for k in range(self.dof):
-            lin, ang = _body_regressor(*velocities[k], *accelerations[k])  # (..., 10, 3)
-            pi = parameters[:, 10 * k : 10 * k + 10]  # (P, 10)
-            force.append((matmul(pi, lin), matmul(pi, ang)))  # (..., P, 3)
-        return self._backward(poses, force)
+        return self._columns(q, [(v, a, gravity_scale)], parameters)[..., 0, :, :]
 
     def slotine_li(self, q, qd, qd_a, qdd_a):
         """``Y_SL(q, qd, qd_a, qdd_a)`` (``M qdd_a + C(q, qd) qd_a + g``, Christoffel ``C``) over
-        the boxes: ``(Y_{2g}(q, qd + qd_a, 2 qdd_a) - Y_{-2g}(q, qd - qd_a, -2 qdd_a)) / 4``."""
-        plus = self.evaluate(q, qd + qd_a, qdd_a.scaled(2.0), gravity_scale=2.0)
-        minus = self.evaluate(q, qd - qd_a, qdd_a.scaled(-2.0), gravity_scale=-2.0)
-        return (plus - minus).scaled(0.25)
+        the boxes: ``(Y_{2g}(q, qd + qd_a, 2 qdd_a) - Y_{-2g}(q, qd - qd_a, -2 qdd_a)) / 4``,
+        both in one pass (the poses shared)."""
+        identity = Ball.point(np.eye(10 * self.dof))
+        columns = [
+            (qd + qd_a, qdd_a.scaled(2.0), 2.0),
+            (qd - qd_a, qdd_a.scaled(-2.0), -2.0),
+        ]
+        Y = self._run(q, columns, identity, polarize=True)  # batch + (1, 10 dof, dof)
+        return transposed(Y[..., 0, :, :])
 
     def mass_matrices(self, q, parameters):
         """``M(q)`` of each model (rows of ``parameters``, armature excluded) over the boxes of
-        ``q``: ``batch + (P, dof, dof)``. Column ``j`` is ``Y(q, 0, e_j) pi`` without gravity; the
-        two enclosures of each off-diagonal entry are intersected. With a jet ``q`` (``q`` and
-        ``qd``) the derivative is ``dM/dt = C(q, qd) + C(q, qd)^T``, enclosed."""
+        ``q``: ``batch + (P, dof, dof)``. Column ``j`` is ``Y(q, 0, e_j) pi`` without gravity
+        (the poses shared by the columns, the zero velocities and the bodies before joint ``j``
+        skipped); the two enclosures of each off-diagonal entry are intersected. With a jet
+        ``q`` (``q`` and ``qd``) the derivative is ``dM/dt = C(q, qd) + C(q, qd)^T``,
+        enclosed."""
         n = self.dof
-        batch = q.shape[:-1]
-        qq = q.map(lambda x: np.broadcast_to(x[..., None, :], batch + (n, n)))
-        zero = zeros(batch + (n, n))
-        unit = Ball.point(np.broadcast_to(np.eye(n), batch + (n, n)))
-        columns = self.torques(qq, zero, unit, parameters, gravity_scale=0.0)  # (..., j, P, i)
-        return intersect_symmetric(columns.map(lambda x: np.moveaxis(x, -3, -1)))
+        zero = Ball.point(np.zeros(n))
+        eye = np.eye(n)
+        columns = [(zero, Ball.point(eye[j]), 0.0) for j in range(n)]
+        values = self._columns(q, columns, parameters)  # (..., j, P, i)
+        return intersect_symmetric(values.map(lambda x: np.moveaxis(x, -3, -1)))
 
     def mass_matrix_curvatures(self, q: Ball, parameters):
         """``d^2 M / dq_k dq_j`` of each model (rows of ``parameters``, armature excluded) over the
         boxes of ``q``: ``batch + (k, j, P, dof, dof)``, symmetric in ``k, j``. Each pair ``k <= j``
-        is one evaluation of :meth:`mass_matrices` at the hyper-dual ``q + s e_k + t e_j`` (a jet
-        of jets), whose ``d^2 / ds dt`` part is the second derivative."""
+        is the ``d^2 / ds dt`` part of :meth:`mass_matrices` at the hyper-dual ``q + s e_k + t
+        e_j``; all pairs are evaluated in one pass as the second derivatives of ``M`` in the
+        algebra of values, gradients and Hessians (:func:`~urpc.model.ball_kernels.hessian`),
+        with the same terms in the same order, the value and the gradient computed once."""
         n = self.dof
+        if not isinstance(parameters, Ball):
+            parameters = Ball.point(np.atleast_2d(np.asarray(parameters, dtype=float)))
         batch = q.shape[:-1]
+        algebra = kernels.hessian(n)
+        K = algebra.components
+        B = int(np.prod(batch, dtype=int))
+        qm = np.zeros((B, n, K))
+        qr = np.zeros((B, n, K))
+        qm[:, :, 0] = np.reshape(q.mid, (B, n))
+        qr[:, :, 0] = np.reshape(q.rad, (B, n))
+        qm[:, np.arange(n), 1 + np.arange(n)] = 1.0
+        columns = np.zeros((B, n, n, K))
+        accelerations = np.zeros((B, n, n, K))
+        accelerations[:, np.arange(n), np.arange(n), 0] = 1.0
+        mid, rad = kernels.recursion(
+            self.chain, algebra, (qm, qr), (columns, columns), (accelerations, columns),
+            np.zeros(n), (parameters.mid, parameters.rad),
+        )  # fmt: skip  # (B, j, P, i, K)
+        pairs = kernels.pair_index(n)
         first, second = np.triu_indices(n)
-        pairs = len(first)
-        shape = batch + (pairs, n)
-
-        def point(x):
-            return Ball.point(np.broadcast_to(x, shape))
-
-        boxes = q.map(lambda x: np.broadcast_to(x[..., None, :], shape))
-        eye = np.eye(n)
-        hyper = Jet(Jet(boxes, point(eye[first])), Jet(point(eye[second]), point(0.0)))
-        values = self.mass_matrices(hyper, parameters).dot.dot  # batch + (pairs, P, n, n)
-        full = batch + (n, n) + values.mid.shape[len(batch) + 1 :]
-        mid, rad = np.zeros(full), np.zeros(full)
-        for source, out in ((values.mid, mid), (values.rad, rad)):
-            out[..., first, second, :, :, :] = source
-            out[..., second, first, :, :, :] = source
-        return Ball(mid, rad)
+        index = pairs[first, second]
+        # (B, pairs, P, i, j): the two enclosures of each off-diagonal entry intersected.
+        values = intersect_symmetric(
+            Ball(
+                np.moveaxis(mid[..., index], (-1, 1), (1, -1)),
+                np.moveaxis(rad[..., index], (-1, 1), (1, -1)),
+            )
+        )
+        P = mid.shape[2]
+        full = (B, n, n, P, n, n)
+        out_mid, out_rad = np.zeros(full), np.zeros(full)
+        for source, out in ((values.mid, out_mid), (values.rad, out_rad)):
+            out[:, first, second] = source
+            out[:, second, first] = source
+        shape = batch + full[1:]
+        return Ball(out_mid.reshape(shape), out_rad.reshape(shape))
 
     def coriolis_matrices(self, q, qd, parameters):
         """The Christoffel ``C(q, qd)`` of each model over the boxes: ``batch + (P, dof, dof)``,
         column ``j`` by polarization ``(c(q, qd + e_j) - c(q, qd - e_j)) / 4``, ``c(q, x) =
-        Y(q, x, 0) pi`` without gravity."""
+        Y(q, x, 0) pi`` without gravity (all ``2 dof`` evaluations in one pass)."""
         n = self.dof
-        batch = q.shape[:-1]
-        qq = q.map(lambda x: np.broadcast_to(x[..., None, :], batch + (n, n)))
-        unit = Ball.point(np.broadcast_to(np.eye(n), batch + (n, n)))
-        rates = qd.map(lambda x: np.broadcast_to(x[..., None, :], batch + (n, n)))
-        zero = zeros(batch + (n, n))
-        plus = self.torques(qq, rates + unit, zero, parameters, gravity_scale=0.0)
-        minus = self.torques(qq, rates - unit, zero, parameters, gravity_scale=0.0)
-        return (plus - minus).scaled(0.25).map(lambda x: np.moveaxis(x, -3, -1))
+        zero = Ball.point(np.zeros(n))
+        eye = np.eye(n)
+        columns = [(qd + Ball.point(eye[j]), zero, 0.0) for j in range(n)]
+        columns += [(qd - Ball.point(eye[j]), zero, 0.0) for j in range(n)]
+        values = self._columns(q, columns, parameters, polarize=True)  # (..., j, P, i)
+        return values.map(lambda x: np.moveaxis(x, -3, -1))
 
     def christoffel_matrices(self, q, parameters):
         """``C(q; e_k)`` for every unit velocity ``e_k`` and each model over the boxes of ``q``:
         ``batch + (k, P, dof, dof)``. Column ``i`` of ``C(q; e_k)`` is column ``k`` of
         ``C(q; e_i)`` (the Christoffel symbols are symmetric in their last two indices), so only
         the ``dof (dof + 1) / 2`` pairs ``k <= i`` are evaluated, each by polarization
-        ``(c(q, e_k + e_i) - c(q, e_k - e_i)) / 4``, instead of ``dof^2``."""
+        ``(c(q, e_k + e_i) - c(q, e_k - e_i)) / 4``, instead of ``dof^2`` (all in one pass, unit
+        parameter rows carried as regressor columns)."""
         n = self.dof
         batch = q.shape[:-1]
         first, second = np.triu_indices(n)
-        pairs = len(first)
         eye = np.eye(n)
-        qq = q.map(lambda x: np.broadcast_to(x[..., None, :], batch + (pairs, n)))
-        zero = zeros(batch + (pairs, n))
-
-        def velocities(v):
-            return Ball.point(np.broadcast_to(v, batch + (pairs, n)))
-
-        plus = self.torques(qq, velocities(eye[first] + eye[second]), zero, parameters, 0.0)
-        minus = self.torques(qq, velocities(eye[first] - eye[second]), zero, parameters, 0.0)
-        columns = (plus - minus).scaled(0.25)  # batch + (pairs, P, rows)
-        models = columns.mid.shape[-2]
+        zero = Ball.point(np.zeros(n))
+        columns = [
+            (Ball.point(eye[k] + eye[i]), zero, 0.0) for k, i in zip(first, second, strict=True)
+        ]
+        columns += [
+            (Ball.point(eye[k] - eye[i]), zero, 0.0) for k, i in zip(first, second, strict=True)
+        ]
+        if isinstance(q, Jet):
+            values = self._columns(q, columns, parameters, polarize=True)  # batch + (pairs, P, i)
+            models = values.mid.shape[-2]
+            shape = batch + (n, models, n, n)
+            mid, rad = np.zeros(shape), np.zeros(shape)
+            for source, out in ((values.mid, mid), (values.rad, rad)):
+                out[..., first, :, :, second] = np.moveaxis(source, -3, 0)
+                out[..., second, :, :, first] = np.moveaxis(source, -3, 0)
+            return Ball(mid, rad)
+        if not isinstance(parameters, Ball):
+            parameters = Ball.point(np.atleast_2d(np.asarray(parameters, dtype=float)))
+        B = int(np.prod(batch, dtype=int))
+        velocities = np.stack([column[0].mid for column in columns])  # (C, n), points
+        v = np.broadcast_to(velocities[None, :, :, None], (B, len(columns), n, 1))
+        outm, outr, rows = kernels.recursion(
+            self.chain, kernels.first_order(0), _stacked([q], batch, n), (v, np.zeros_like(v)),
+            (np.zeros_like(v), np.zeros_like(v)), np.zeros(len(columns)),
+            (parameters.mid, parameters.rad), polarize=True, raw=True,
+        )  # fmt: skip
+        models = parameters.mid.shape[0]
         shape = batch + (n, models, n, n)
-        mid, rad = np.zeros(shape), np.zeros(shape)
-        for values, out in ((columns.mid, mid), (columns.rad, rad)):
-            out[..., first, :, :, second] = np.moveaxis(values, -3, 0)
-            out[..., second, :, :, first] = np.moveaxis(values, -3, 0)
-        return Ball(mid, rad)
+        return Ball(
+            kernels.pair_scatter(outm, first, second, rows, models).reshape(shape),
+            kernels.pair_scatter(outr, first, second, rows, models).reshape(shape),
+        )
 
 
 def parameters_of(robot: Robot) -> np.ndarray:
@@ -315,36 +342,69 @@ def parameters_of(robot: Robot) -> np.ndarray:
     )
 
 
-def _body_regressor(vl, vw, al, aw):
-    """The body regressor ``Phi(v, a)``: the force ``f = I a + v x* (I v)`` as a linear map of
-    ``pi = (m, h, I_xx, I_xy, I_yy, I_xz, I_yz, I_zz)`` (``h = m c``, ``I`` about the origin);
-    returns its linear and angular parts as ``(..., 10, 3)`` (parameter, component)::
+# ============================================================================ helpers
+def _chain(joints: tuple[_Joint, ...], gravity: np.ndarray) -> kernels.Chain:
+    parts = np.zeros((len(joints), 3, 9))
+    direction = np.zeros((len(joints), 3))
+    for k, joint in enumerate(joints):
+        if joint.revolute:
+            parts[k] = np.stack([A.reshape(9) for A in joint.parts])
+        else:
+            parts[k, 0] = joint.rotation.reshape(9)
+            direction[k] = joint.rotation @ joint.axis
+    return kernels.Chain(
+        np.array([j.parent for j in joints], dtype=np.int64),
+        np.array([j.revolute for j in joints], dtype=np.bool_),
+        np.array([j.axis for j in joints], dtype=float).reshape(len(joints), 3),
+        parts,
+        np.array([j.translation for j in joints], dtype=float).reshape(len(joints), 3),
+        direction,
+        np.asarray(gravity, dtype=float),
+    )
 
-        f_lin = m (a_l + w x v_l) + (S(a_w) + S(w)^2) h
-        f_ang = -S(a_l - v_l x w) h + (L(a_w) + S(w) L(w)) iota,    I x = L(x) iota
-    """
-    batch = vl.shape[:-1]
-    Sw = skew(vw)
-    mass_lin = (al + cross(vw, vl)).map(lambda x: x[..., None])  # (..., 3, 1)
-    h_lin = skew(aw) + matmul(Sw, Sw)
-    h_ang = -skew(al - cross(vl, vw))
-    i_ang = _inertia_map(aw) + matmul(Sw, _inertia_map(vw))  # (..., 3, 6)
-    lin = concatenate([mass_lin, h_lin, zeros(batch + (3, 6))], -1)
-    ang = concatenate([zeros(batch + (3, 1)), h_ang, i_ang], -1)
-    return transposed(lin), transposed(ang)
+
+def _depth(x) -> int:
+    """0 for a ball, 1 for a jet, 2 for a jet of jets."""
+    return 1 + max(_depth(x.val), _depth(x.dot)) if isinstance(x, Jet) else 0
 
 
-def _inertia_map(x):
-    """``L(x)`` with ``I x = L(x) iota`` for ``iota = (xx, xy, yy, xz, yz, zz)``: (..., 3, 6)."""
-    if isinstance(x, Jet):
-        return Jet(_inertia_map(x.val), _inertia_map(x.dot))
+def _shape(x) -> tuple[int, ...]:
+    return _shape(x.val) if isinstance(x, Jet) else x.mid.shape
 
-    def build(v):
-        a, b, c = v[..., 0], v[..., 1], v[..., 2]
-        out = np.zeros(v.shape[:-1] + (3, 6))
-        out[..., 0, 0], out[..., 0, 1], out[..., 0, 3] = a, b, c
-        out[..., 1, 1], out[..., 1, 2], out[..., 1, 4] = a, b, c
-        out[..., 2, 3], out[..., 2, 4], out[..., 2, 5] = a, b, c
-        return out
 
-    return Ball(build(x.mid), build(x.rad))
+def _broadcast(x, shape):
+    return x.map(lambda a: np.broadcast_to(a, shape))
+
+
+def _constant_along(x, axis: int) -> bool:
+    """Whether a jet's value is the same at every index of ``axis``."""
+    value = Jet.of(x).val
+    return all(
+        np.array_equal(a, np.broadcast_to(np.take(a, [0], axis), a.shape))
+        for a in (value.mid, value.rad)
+    )
+
+
+def _components(x, depth: int) -> list[Ball]:
+    """The balls of a ball, jet or jet of jets as an element of depth ``depth`` (``val`` parts
+    first, as :class:`Jet` promotes a ball: zero derivatives)."""
+    if depth == 0:
+        return [x]
+    x = Jet.of(x)
+    return _components(x.val, depth - 1) + _components(x.dot, depth - 1)
+
+
+def _assemble(parts: list[Ball], depth: int):
+    if depth == 0:
+        return parts[0]
+    half = len(parts) // 2
+    return Jet(_assemble(parts[:half], depth - 1), _assemble(parts[half:], depth - 1))
+
+
+def _stacked(parts: list[Ball], outer: tuple[int, ...], n: int):
+    """(mid, rad) of shape (B, n, K) of the components over the flattened batch ``outer``."""
+    B = int(np.prod(outer, dtype=int))
+    return tuple(
+        np.stack([np.reshape(getattr(p, which), (B, n)) for p in parts], -1)
+        for which in ("mid", "rad")
+    )
