@@ -66,10 +66,12 @@ class PeriodBound:
     ) -> np.ndarray:
         """The cells that decide the floor at period ``T`` in the tube ``tube`` (indices along
         the cell axis), the ones to split: on every piece whose floor is within ``share`` of the
-        worst, the cells where an inertia model fails or the contraction margin ``a - b`` is not
-        positive; when none does, the cells within ``share`` of an extreme of a term the floor
-        takes over the cells (the least margin, the largest quasi-static error plus response,
-        pushed deviation and forcing)."""
+        worst, the cells where an inertia model fails (its box too wide) and those where the
+        contraction margin ``a - b`` is not positive; when none is, the cells within ``share`` of
+        an extreme of a term the floor takes over the cells (the least margin, the largest
+        quasi-static error plus response, pushed deviation and forcing). Failing margins and the
+        terms are left alone where more than :data:`FLAT_FRACTION` of the cells are near (the
+        period, not the cells' width, is then the cause)."""
         d = d + self.joints.coulomb
         D = self.gain(T)
         floors, terms_of = [], []
@@ -81,15 +83,18 @@ class PeriodBound:
         for floor, p, terms in zip(floors, quantities["pieces"], terms_of, strict=True):
             if floor < worst * (1 - share):
                 continue
-            failing = ~p["valid"] | ~(terms["margin"] > 0)
-            if failing.any():
-                chosen |= failing
-                continue
-            near = [terms["margin"] <= terms["margin"].min() * (1 + share)]
-            near += [
-                terms[k] >= terms[k].max() * (1 - share) for k in ("slow", "pushed", "forcing")
-            ]
-            for cells in near:  # a term nearly flat over the cells gains little from splitting
+            chosen |= ~p["valid"]  # an inertia model too wide over its cell's box
+            failing = p["valid"] & ~(terms["margin"] > 0)
+            if failing.any() or not p["valid"].all():
+                near = [failing]
+            else:
+                near = [terms["margin"] <= terms["margin"].min() * (1 + share)]
+                near += [
+                    terms[k] >= terms[k].max() * (1 - share) for k in ("slow", "pushed", "forcing")
+                ]
+            # A term nearly flat over the cells (or failing on most of them: the period, not the
+            # cells' width, is the cause) gains little from splitting.
+            for cells in near:
                 if cells.sum() <= FLAT_FRACTION * len(cells):
                     chosen |= cells
         return np.flatnonzero(chosen)

@@ -21,6 +21,8 @@ REFINE_ROUNDS = 6
 REFINE_GAIN = 0.02
 #: ... and the cells stay at most this many.
 MAX_REFINED_CELLS = 4000
+#: At most this many rounds for the largest period (when it is at least a tenth of the period).
+PERIOD_ROUNDS = 3
 
 
 class SampledSearch:
@@ -158,14 +160,15 @@ class SampledSearch:
 
     def max_sample_period(self) -> float:
         """The largest ``T <= 2 T_controller`` with a floor below ``epsilon`` in the tube
-        ``||e|| <= epsilon`` (the cells' enclosures hold for every period up to ``2 T``),
-        splitting the cells that fail just above it while that lengthens it by at least
-        :data:`REFINE_GAIN`."""
+        ``||e|| <= epsilon`` (the cells' enclosures hold for every period up to ``2 T``); when
+        it is at least ``T / 10``, splitting the cells that fail just above it while that
+        lengthens it by at least :data:`REFINE_GAIN` (:data:`PERIOD_ROUNDS` rounds at most)."""
         quantities = self.enclose(self.epsilon)  # cached from floor()
         self.say("searching the largest sample period")
         best = self._largest_period(quantities)
-        for _ in range(REFINE_ROUNDS):
-            if best >= self.extension:
+        for _ in range(PERIOD_ROUNDS):
+            # Refined only where it can matter: from a tenth of the period up to twice it.
+            if best >= self.extension or best < 0.1 * self.T:
                 break
             failing = min(self.extension, max(best, self.extension * 1e-4) * (1 + 2 * REFINE_GAIN))
             floor, _, rho = self.least_tube(quantities, failing)
