@@ -10,11 +10,9 @@ import dataclasses
 
 import numpy as np
 
-from ..bounds.base import link_body_placement
-from ..bounds.hull import barycentric_enclosure
-from ..model.regressor_balls import Ball, BallRegressor, parameters_of
-from ..model.uncertainty import ParameterBox
+from ..model.regressor_balls import Ball, BallRegressor, Jet
 from .cell_inertia import LAPACK_MARGIN, InertiaModel, safe_cholesky, spectral_norm
+from .parameter_sets import LinkParameters, PlantParameters
 
 
 def column_norm(x: np.ndarray, axis=-2) -> np.ndarray:
@@ -67,6 +65,25 @@ class MismatchNorms:
         )  # fmt: skip
 
 
+@dataclasses.dataclass(frozen=True)
+class OverCell:
+    """A matrix function ``X(q)`` over a cell's region of ``q`` (``q_c + dq``, ``|x_l| <= r_l``
+    along the reference and ``||e|| <= rho`` across it, ``dq = x + e``): either a ball that holds
+    it over the cell's box (``slopes`` ``None``), or, by the mean value theorem, its value at the
+    centre ``q_c`` (a ball of rounding width) and its derivatives ``dX/dq_l`` over the box (the
+    axis after the cells), ``X(q) = X(q_c) + sum_l dq_l dX/dq_l(xi)``. The second keeps the
+    structure that a ball of the whole box loses through ``|P|`` (its radius is first-order in
+    the box's width; only the derivatives' radii, times ``|dq_l|``, go through ``|P|`` now)."""
+
+    value: Ball
+    slopes: Ball | None = None
+
+    def select(self, index: tuple) -> OverCell:
+        """The entries ``index`` of the axes after the cells (and the slopes' direction)."""
+        slopes = None if self.slopes is None else self.slopes[(slice(None), slice(None)) + index]
+        return OverCell(self.value[(slice(None),) + index], slopes)
+
+
 class CenteredCoriolis:
     """The Christoffel matrix ``C(q, v; pi)`` over boxes of ``q``, ``v`` and ``pi`` in a form
     that keeps the structure of each term for norms ``sup ||P C P^T||``: ``C`` is linear in ``v``
@@ -75,19 +92,20 @@ class CenteredCoriolis:
         C = C(q; v_c, pi_c) + sum_k dv_k C(q; e_k, pi_c) + sum_j dpi_j C(q; v_c, e_j)
             + sum_kj dv_k dpi_j C(q; e_k, e_j)
 
-    each term enclosed over the box of ``q`` alone (``|dv_k|``, ``|dpi_j|`` at most the boxes'
-    radii), its centre through ``P`` exactly and its (first-order in ``q``) radius with absolute
-    values. The bound is affine in the velocity radii: :meth:`coefficients` gives ``(A, B)`` with
-    ``sup ||P C P^T|| <= A + B dv`` for every velocity box of centre ``v_c`` and radii ``dv``, so
-    that a wider velocity box (a larger ``r_max``) costs no new enclosure."""
+    each term over the cell's region of ``q`` (:class:`OverCell`: the value at the centre and
+    the derivatives over the box, or a ball of the box), its centre through ``P`` exactly and its
+    radius with absolute values (``|dv_k|``, ``|dpi_j|`` at most the boxes' radii). The bound is
+    affine in the velocity radii: :meth:`coefficients` gives ``(A, B)`` with ``sup ||P C P^T|| <=
+    A + B dv`` for every velocity box of centre ``v_c`` and radii ``dv``, so that a wider velocity
+    box (a larger ``r_max``) costs no new enclosure."""
 
     def __init__(
         self,
         radii: np.ndarray,
-        center: Ball,
-        per_velocity: Ball,
-        per_parameter: Ball | None,
-        per_both: Ball | None,
+        center: OverCell,
+        per_velocity: OverCell,
+        per_parameter: OverCell | None,
+        per_both: OverCell | None,
     ):
         """The four terms over the cells, as :meth:`sharing` encloses them: ``radii`` the
         parameter box's radii along the shared directions ``e_j`` (zero where this box is exact),
@@ -100,7 +118,11 @@ class CenteredCoriolis:
 
     @classmethod
     def sharing(
-        cls, regressor: BallRegressor, q: Ball, forms: list[tuple[np.ndarray, Ball]]
+        cls,
+        regressor: BallRegressor,
+        q: Ball,
+        forms: list[tuple[np.ndarray, Ball]],
+        taylor: bool = True,
     ) -> list[CenteredCoriolis]:
         """One form per ``(v_center, parameters)`` over the same box of ``q`` (boxes of any
         centres and radii: the plant's hull and the mismatch, of each piece of the box). The
@@ -108,37 +130,86 @@ class CenteredCoriolis:
         e_k, e_j)`` along the union of the boxes' directions, with every centre's ``C(q; e_k,
         pi_c)``, in one call, and ``C(q; v_c, .)`` of every centre and direction in one call per
         distinct ``v_c`` (each row is computed as it would be alone, up to the order of
-        rounding)."""
-        free = free_directions([parameters for _, parameters in forms])
-        size = forms[0][1].mid.shape[0]
-        directions = np.zeros((len(free), size))
-        directions[np.arange(len(free)), free] = 1.0
+        rounding). With ``taylor``, each term by its value at the box's centre and its
+        derivatives over the box (:class:`OverCell`), else by a ball of the box."""
+        keys, directions = shared_directions([parameters for _, parameters in forms])
         count = len(forms)
-        centres = np.stack([parameters.mid for _, parameters in forms])
-        each = regressor.christoffel_matrices(q, Ball.point(np.concatenate([centres, directions])))
-        per_both = each[:, :, count:] if len(free) else None
-        by_velocity: dict[bytes, tuple[list[int], Ball]] = {}
+        centres = Ball(
+            np.stack([parameters.centre.mid for _, parameters in forms]),
+            np.stack([parameters.centre.rad for _, parameters in forms]),
+        )
+        rows = Ball(
+            np.concatenate([centres.mid, directions.mid]),
+            np.concatenate([centres.rad, directions.rad]),
+        )
+        free = keys  # the shared directions (their number)
+        cells, n = q.mid.shape
+        if taylor:
+            # Derivatives along each coordinate l over the box: a jet per direction (the
+            # directions share the value, which the recursion computes once).
+            along = Jet(
+                q.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n))),
+                Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
+            )
+            centre = Ball.point(q.mid)
+
+            def over_cell(function, *arguments) -> OverCell:
+                spread = tuple(
+                    a.map(lambda x: np.broadcast_to(x[:, None], (cells, n) + x.shape[1:]))
+                    for a in arguments
+                )
+                return OverCell(function(centre, *arguments), function(along, *spread).dot)
+        else:
+
+            def over_cell(function, *arguments) -> OverCell:
+                return OverCell(function(q, *arguments))
+
+        if DIRECTIONS_TAYLOR or not len(free):
+            each = over_cell(lambda x: regressor.christoffel_matrices(x, rows))
+            per_both = each.select((slice(None), slice(count, None))) if len(free) else None
+        else:
+            each = over_cell(lambda x: regressor.christoffel_matrices(x, centres))
+            per_both = OverCell(regressor.christoffel_matrices(q, directions))
+        by_velocity: dict[bytes, tuple[list[int], np.ndarray]] = {}
         for index, (v_center, _) in enumerate(forms):
             key = np.ascontiguousarray(v_center).tobytes()
             by_velocity.setdefault(key, ([], v_center))[0].append(index)
-        centre_terms: dict[int, tuple[Ball, Ball | None]] = {}
+        centre_terms: dict[int, tuple[OverCell, OverCell | None]] = {}
         for indices, v_center in by_velocity.values():
-            rows = np.concatenate([centres[indices], directions])
-            values = regressor.coriolis_matrices(q, Ball.point(v_center), Ball.point(rows))
-            along = values[:, len(indices) :] if len(free) else None
+            if DIRECTIONS_TAYLOR or not len(free):
+                chosen = Ball(
+                    np.concatenate([centres.mid[indices], directions.mid]),
+                    np.concatenate([centres.rad[indices], directions.rad]),
+                )
+                values = over_cell(
+                    lambda x, v, chosen=chosen: regressor.coriolis_matrices(x, v, chosen),
+                    Ball.point(v_center),
+                )
+                along = values.select((slice(len(indices), None),)) if len(free) else None
+            else:
+                chosen = centres[indices]
+                values = over_cell(
+                    lambda x, v, chosen=chosen: regressor.coriolis_matrices(x, v, chosen),
+                    Ball.point(v_center),
+                )
+                along = OverCell(regressor.coriolis_matrices(q, Ball.point(v_center), directions))
             for position, index in enumerate(indices):
-                centre_terms[index] = (values[:, position], along)
+                centre_terms[index] = (values.select((position,)), along)
         return [
             cls(
-                parameters.rad[free], centre_terms[index][0], each[:, :, index],
-                centre_terms[index][1], per_both,
+                parameters.weights_along(keys), centre_terms[index][0],
+                each.select((slice(None), index)), centre_terms[index][1], per_both,
             )
             for index, (_, parameters) in enumerate(forms)
         ]  # fmt: skip
 
-    def coefficients(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def coefficients(
+        self, P: np.ndarray, radii: np.ndarray, ball: float
+    ) -> tuple[np.ndarray, np.ndarray]:
         """``(A, B)``, shapes (cells,) and (cells, n): ``sup ||P C P^T||_2 <= A + B dv`` per cell
-        over the boxes (``P``: (cells, n, n); ``dv``: the velocity radii, (cells, n))."""
+        over the cells' regions (``P``: (cells, n, n); ``dv``: the velocity radii, (cells, n);
+        ``radii``: the half-widths of the reference along each coordinate, (cells, n), and
+        ``ball`` the tube's radius: ``sum_l |dq_l| s_l <= sum_l r_l s_l + rho ||s||_2``)."""
         absolute = np.abs(P)
 
         def congruent(Q: np.ndarray, X: np.ndarray) -> np.ndarray:
@@ -148,10 +219,18 @@ class CenteredCoriolis:
         def through(Q: np.ndarray, X: np.ndarray) -> np.ndarray:
             return spectral_norm(congruent(Q, X))
 
-        def structured(X: Ball) -> np.ndarray:
-            return through(P, X.mid) + through(absolute, X.rad)
+        def spread(s: np.ndarray) -> np.ndarray:
+            """``sup sum_l |dq_l| s_l`` over the region; ``s``: (cells, l, ...)."""
+            r = radii.reshape(radii.shape + (1,) * (s.ndim - 2))
+            return np.sum(r * s, axis=1) + ball * np.sqrt(np.sum(s * s, axis=1))
 
-        def summed(X: Ball, weights: np.ndarray) -> np.ndarray:
+        def structured(X: OverCell) -> np.ndarray:
+            out = through(P, X.value.mid) + through(absolute, X.value.rad)
+            if X.slopes is not None:
+                out = out + spread(through(P, X.slopes.mid) + through(absolute, X.slopes.rad))
+            return out
+
+        def summed_ball(X: Ball, weights: np.ndarray, triangle: bool = True) -> np.ndarray:
             """``sup ||P sum_j dpi_j X_j P^T||`` over ``|dpi_j| <= weights_j`` (axis -3 is j).
             The centres: ``|sum_j dpi_j Y_j| <= sum_j w_j |Y_j|`` entrywise (``Y_j = P X_j
             P^T``), and the spectral norm is monotone on non-negative matrices (``||A|| <= |||A|||
@@ -160,10 +239,16 @@ class CenteredCoriolis:
             (non-negative) radii are summed first, ``|| |P| sum_j w_j R_j |P|^T ||``."""
             Y = congruent(P, X.mid)
             centres = spectral_norm(np.einsum("...jab,j->...ab", np.abs(Y), weights))
-            if len(weights) <= TRIANGLE_DIRECTIONS:
+            if triangle and len(weights) <= TRIANGLE_DIRECTIONS:
                 centres = np.minimum(centres, spectral_norm(Y) @ weights)
             radius = np.einsum("...jab,j->...ab", X.rad, weights)
             return centres + through(absolute, radius)
+
+        def summed(X: OverCell, weights: np.ndarray) -> np.ndarray:
+            out = summed_ball(X.value, weights)
+            if X.slopes is not None:
+                out = out + spread(summed_ball(X.slopes, weights, triangle=False))
+            return out
 
         constant = structured(self.center)
         per_velocity = structured(self.per_velocity)
@@ -176,39 +261,63 @@ class CenteredCoriolis:
 #: Up to this many parameter directions, a Coriolis form's parameter part is also bounded by the
 #: triangle inequality (one norm per direction; it can beat the entrywise sum for a few).
 TRIANGLE_DIRECTIONS = 24
+DIRECTIONS_TAYLOR = True
 
 #: The Coriolis forms are enclosed over at most this many bytes of recursion at a time (their
-#: Christoffel batch grows as ``n^4`` per cell: a 10-link chain holds 5 MB per cell).
+#: Christoffel batch grows as ``n^4`` per cell, and ``n^5`` with its derivatives).
 CORIOLIS_CHUNK_BYTES = 2**28
 
 
 def coriolis_coefficients(
-    regressor: BallRegressor, q: Ball, forms: list[tuple[np.ndarray, Ball, np.ndarray]]
+    regressor: BallRegressor,
+    q: Ball,
+    radii: np.ndarray,
+    ball: float,
+    forms: list[tuple[np.ndarray, Ball, np.ndarray]],
+    taylor: bool = True,
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """:meth:`CenteredCoriolis.coefficients` of each form ``(v_center, parameters, P)`` of
-    :meth:`CenteredCoriolis.sharing` through its factor ``P`` ((cells, n, n)), computed over
-    chunks of cells so that memory stays bounded whatever the arm (every cell's enclosure is
-    independent of the others'): ``out[form] = (A, B)``."""
+    :meth:`CenteredCoriolis.sharing` through its factor ``P`` ((cells, n, n)) over the cells'
+    regions (``q`` their boxes, ``radii`` the reference's half-widths, ``ball`` the tube),
+    computed over chunks of cells so that memory stays bounded whatever the arm (every cell's
+    enclosure is independent of the others'): ``out[form] = (A, B)``."""
     cells, n = q.mid.shape
-    rows = len(forms) + len(free_directions([parameters for _, parameters, _ in forms]))
+    rows = len(forms) + len(shared_directions([parameters for _, parameters, _ in forms])[0])
     per_cell = n * (n + 1) // 2 * rows * n * 3 * 8 * 4  # the backward pass's force rows
+    per_cell *= 2 * (n + 1) if taylor else 1  # and the derivatives along each coordinate
     chunk = max(1, int(CORIOLIS_CHUNK_BYTES // max(per_cell, 1)))
     parts: list[list[tuple[np.ndarray, np.ndarray]]] = []
     for start in range(0, cells, chunk):
         part = slice(start, min(cells, start + chunk))
         chunk_forms = [(v[part], parameters) for v, parameters, _ in forms]
-        shared = CenteredCoriolis.sharing(regressor, q[part], chunk_forms)
+        shared = CenteredCoriolis.sharing(regressor, q[part], chunk_forms, taylor)
         parts.append(
-            [form.coefficients(P[part]) for form, (_, _, P) in zip(shared, forms, strict=True)]
+            [
+                form.coefficients(P[part], radii[part], ball)
+                for form, (_, _, P) in zip(shared, forms, strict=True)
+            ]
         )
     return [
         tuple(np.concatenate([p[f][i] for p in parts]) for i in range(2)) for f in range(len(forms))
     ]
 
 
-def free_directions(boxes: list[Ball]) -> np.ndarray:
-    """The parameters with a non-zero radius in any of the boxes (their indices)."""
-    return np.flatnonzero(np.any([box.rad > 0 for box in boxes], axis=0))
+def shared_directions(
+    sets: list[PlantParameters],
+) -> tuple[tuple[tuple[str, str], ...], Ball]:
+    """The union of the sets' directions (keys, and the direction of each: balls (p, 10 dof)), in
+    the order they first appear (a key names the same direction in every set)."""
+    keys, mids, rads = [], [], []
+    for parameters in sets:
+        for k, key in enumerate(parameters.keys):
+            if key not in keys:
+                keys.append(key)
+                mids.append(parameters.directions.mid[k])
+                rads.append(parameters.directions.rad[k])
+    size = sets[0].centre.mid.shape[0]
+    if not keys:
+        return (), Ball.point(np.zeros((0, size)))
+    return tuple(keys), Ball(np.array(mids), np.array(rads))
 
 
 def velocity_bound(
@@ -231,86 +340,55 @@ def velocity_bound(
     return (constant + np.sum(per_velocity * box, axis=-1) + ball) * (1 + 1e-12)
 
 
-def plant_hull(robot, box: ParameterBox) -> Ball:
-    """The standard parameters of the joint bodies over the box (nominal plus each uncertain
-    link's barycentric enclosure placed into its body), a ball ``(10 dof,)``."""
-    lower = parameters_of(robot).copy()
-    upper = lower.copy()
-    for link_box in box.uncertain_links:
-        body, A = link_body_placement(robot, link_box.link)
-        lo, hi = barycentric_enclosure(link_box)
-        nominal = link_box.standard_parameters(link_box.nominal)
-        mid, rad = A @ (0.5 * (lo + hi) - nominal), np.abs(A) @ (0.5 * (hi - lo))
-        rad = rad * (1 + 1e-12) + 1e-15 * (np.abs(mid) + np.abs(A) @ np.abs(nominal))
-        columns = slice(10 * body, 10 * body + 10)
-        lower[columns] += mid - rad
-        upper[columns] += mid + rad
-    return Ball.hull(lower, upper)
-
-
-#: At most this many coordinates of a link's parameter box are enumerated at their vertices;
-#: the others enter by the triangle inequality (sound either way; cost 2^VERTEX_COORDINATES).
+#: At most this many generators of a link's parameter set are enumerated at their vertices; the
+#: others enter by the triangle inequality (sound either way; cost 2^VERTEX_COORDINATES).
 VERTEX_COORDINATES = 5
-
-
-@dataclasses.dataclass(frozen=True)
-class LinkParameters:
-    """Where a link enters ``Y_SL`` and its barycentric hull relative to the nominal:
-    ``delta = mid + rad * s``, ``s in [-1, 1]^10`` (link frame; ``A`` places it in its body)."""
-
-    columns: slice
-    A: np.ndarray
-    mid: np.ndarray
-    rad: np.ndarray
-
-
-def link_parameters(robot, box) -> LinkParameters:
-    body, A = link_body_placement(robot, box.link)
-    lower, upper = barycentric_enclosure(box)
-    nominal = box.standard_parameters(box.nominal)
-    mid = 0.5 * (lower + upper) - nominal
-    rad = (0.5 * (upper - lower)) * (1 + 1e-12) + 1e-15 * (np.abs(mid) + np.abs(nominal))
-    rad[upper == lower] = 0.0
-    return LinkParameters(slice(10 * body, 10 * body + 10), A, mid, rad)
 
 
 def link_bound(X: np.ndarray, W: Ball, G: Ball | None, link: LinkParameters) -> np.ndarray:
     """Per cell, ``(c, g)`` with ``||X w|| <= c + rho g`` over ``w = W A delta + G(delta) e`` for
-    every ``delta`` of the link's box, every ``W``, ``G`` in their balls and ``||e|| <= rho``
+    every ``delta`` of the link's set, every ``W``, ``G`` in their balls and ``||e|| <= rho``
     (``X``: (cells, m, n); ``W``: (cells, n, 10); ``G``: (cells, k, n, 10), the Jacobian along the
     tube, enclosed over a tube at least as wide as ``rho``). Shape (2, cells).
 
-    ``||X W A delta||`` is convex in ``delta``: its maximum over the box is at a vertex. The
-    :data:`VERTEX_COORDINATES` coordinates that move it most are enumerated at their vertices,
-    the others enter by the triangle inequality (``rad_j ||X W A e_j||``); the radii of the balls
-    enter with ``|delta| <= |mid| + rad``."""
-    XW = X @ (W.mid @ link.A)  # (cells, m, 10)
-    column_norms = column_norm(XW)  # (cells, 10)
-    score = np.max(column_norms, axis=0) * link.rad
-    free = np.flatnonzero(link.rad > 0)
-    chosen = free[np.argsort(score[free])[::-1][:VERTEX_COORDINATES]]
-    rest = np.setdiff1d(free, chosen)
+    ``||X W A delta||`` is convex in ``delta``: its maximum over the set (a zonotope,
+    :class:`~urpc.control.parameter_sets.LinkParameters`) is at a vertex. The
+    :data:`VERTEX_COORDINATES` generators that move it most are enumerated at their vertices,
+    the others enter by the triangle inequality (``||X W A w_i d_i||``); the radii of the balls
+    (``W``, ``G``, the set's centre and directions) enter with ``|delta|`` bounded per
+    coordinate."""
+    A = link.A
+    XW = X @ (W.mid @ A)  # (cells, m, 10)
+    generators = link.generators  # (10, p)
+    norms = column_norm(XW @ generators)  # (cells, p)
+    order = np.argsort(np.max(norms, axis=0) if len(norms) else norms.sum(0))[::-1]
+    chosen, rest = order[:VERTEX_COORDINATES], order[VERTEX_COORDINATES:]
     corners = np.array(np.meshgrid(*[(-1.0, 1.0)] * len(chosen), indexing="ij")).reshape(
         len(chosen), -1
     )
-    vertices = np.repeat(link.mid[:, None], corners.shape[1], axis=1)
-    vertices[chosen] += link.rad[chosen, None] * corners
-    bound = column_norm(XW @ vertices).max(-1) + column_norms[:, rest] @ link.rad[rest]
-    magnitude = np.abs(link.mid) + link.rad
-    absolute = np.abs(X)
-    radius = (W.rad + 40 * 2.0**-53 * np.abs(W.mid)) @ (np.abs(link.A) @ magnitude)  # (cells, n)
+    vertices = link.centre.mid[:, None] + generators[:, chosen] @ corners  # (10, V)
+    bound = column_norm(XW @ vertices).max(-1) + norms[:, rest].sum(-1)
+    magnitude, residual = link.magnitude, link.residual
+    absolute, absolute_A = np.abs(X), np.abs(A)
+    radius = (W.rad + 40 * 2.0**-53 * np.abs(W.mid)) @ (absolute_A @ magnitude)  # (cells, n)
+    radius = radius + np.abs(W.mid) @ (absolute_A @ residual)
     bound = bound + column_norm(absolute @ radius[..., None])[:, 0]
     per_tube = np.zeros_like(bound)
     if G is not None:
-        XG = X[:, None] @ (G.mid @ link.A)  # (cells, k, m, 10)
+        XG = X[:, None] @ (G.mid @ A)  # (cells, k, m, 10)
         spectral = spectral_norm(np.moveaxis(XG, -1, 1))  # (cells, 10): ||X G_j||_2
         triangle = spectral @ magnitude
-        # Frobenius norm of X G(delta) at the enumerated vertices (a quadratic form in delta).
-        H = np.einsum("ckmj,ckml->cjl", XG, XG)
-        quadratic = np.einsum("cjl,jv,lv->cv", H, vertices, vertices)
+        # Frobenius norm of X G(delta) at the enumerated vertices (a quadratic form in delta),
+        # the other generators by the triangle inequality.
+        flat = XG.reshape(XG.shape[0], -1, XG.shape[-1])
+        H = np.swapaxes(flat, -1, -2) @ flat  # (cells, 10, 10)
+        quadratic = np.sum((H @ vertices) * vertices, axis=-2)  # (cells, V)
         frobenius = np.sqrt(np.maximum(quadratic, 0.0)).max(-1) * (1 + 1e-10)
-        frobenius = frobenius + spectral[:, rest] @ link.rad[rest]
-        spread = (G.rad + 40 * 2.0**-53 * np.abs(G.mid)) @ (np.abs(link.A) @ magnitude)
+        others = generators[:, rest]
+        along = np.sqrt(np.maximum(np.sum((H @ others) * others, axis=-2), 0.0))
+        frobenius = frobenius + along.sum(-1) * (1 + 1e-10)
+        spread = (G.rad + 40 * 2.0**-53 * np.abs(G.mid)) @ (absolute_A @ magnitude)
+        spread = spread + np.abs(G.mid) @ (absolute_A @ residual)
         spread = np.sqrt(np.sum(spread * spread, axis=1))  # (cells, n)
         per_tube = np.minimum(triangle, frobenius) + column_norm(absolute @ spread[..., None])[:, 0]
     return np.stack([bound, per_tube]) * (1 + 1e-10)

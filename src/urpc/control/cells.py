@@ -27,13 +27,7 @@ from ..model.inertia_bounds import InertiaBounds
 from ..model.regressor_balls import Ball, BallRegressor, Jet, matvec, parameters_of
 from ..trajectories import Trajectory, covered_span
 from .box_pieces import split_box
-from .cell_bounds import (
-    MismatchNorms,
-    coriolis_coefficients,
-    link_parameters,
-    plant_hull,
-    velocity_bound,
-)
+from .cell_bounds import MismatchNorms, coriolis_coefficients, velocity_bound
 from .cell_inertia import (
     LAPACK_MARGIN,
     InertiaModel,
@@ -42,6 +36,7 @@ from .cell_inertia import (
     inertia_models,
 )
 from .interval import IntervalPassivityController
+from .parameter_sets import link_parameters, plant_parameters
 from .sampled_joints import JointTerms
 
 #: The first cells are cut so that the reference moves at most this far [rad] per joint within
@@ -52,6 +47,8 @@ MIN_CELLS, MAX_CELLS = 8, 4000
 #: The second derivatives of M are enclosed over boxes of this many first cells (more on long
 #: chains).
 CURVATURE_CELLS = 4
+#: The Coriolis forms by their value at each cell's centre and derivatives over its box.
+CORIOLIS_TAYLOR = True
 #: A cell is split at most this many times (its width at least 2^-MAX_DEPTH of its first cell).
 MAX_DEPTH = 5
 
@@ -135,8 +132,8 @@ class CellFloor:
         self._parameters = np.stack([parameters_of(m) for m in models])
         self._armature = np.stack([np.asarray(m.model.armature, dtype=float) for m in models])
         self._links = [[link_parameters(robot, b) for b in p.uncertain_links] for p in self.pieces]
-        self._plant_hull = plant_hull(robot, box)
-        self._piece_hulls = [plant_hull(robot, piece) for piece in self.pieces]
+        self._plant_set = plant_parameters(robot, box)
+        self._piece_sets = [plant_parameters(robot, piece) for piece in self.pieces]
         self._cache: dict[tuple, dict] = {}
         self._tube_cache: dict[tuple, dict] = {}
         self._curvature_cache: dict[tuple, Ball] = {}
@@ -304,21 +301,21 @@ class CellFloor:
         reference = self._states(batch, tube, 0.0, extension, along_reference=True)
         Y = self.regressor.slotine_li(reference[0], reference[1], reference[1], reference[2])
         center, tube_jacobian = self._mismatch_parts(batch, tube, extension)
-        hull = self._plant_hull
         # The plant's Coriolis matrix (every plant of the piece, over the plant's velocity box,
         # affine in its radii) and the Coriolis mismatch along qd_a, as centered forms over each
         # piece's own parameter hull, through the piece's M_L factor (cell by cell chunks, see
         # coriolis_coefficients).
         lowers = [models[2 + 2 * k] for k in range(len(self._links))]
         forms = [
-            (q.dot.mid, piece_hull, lower.inverse_factor)
-            for piece_hull, lower in zip(self._piece_hulls, lowers, strict=True)
+            (q.dot.mid, piece_set, lower.inverse_factor)
+            for piece_set, lower in zip(self._piece_sets, lowers, strict=True)
         ] + [
-            (qd_a.val.mid, Ball(piece_hull.mid - self._parameters[0], piece_hull.rad),
-             lower.inverse_factor)
-            for piece_hull, lower in zip(self._piece_hulls, lowers, strict=True)
-        ]  # fmt: skip
-        coefficients = coriolis_coefficients(self.regressor, q.val, forms)
+            (qd_a.val.mid, piece_set.shifted(self._parameters[0]), lower.inverse_factor)
+            for piece_set, lower in zip(self._piece_sets, lowers, strict=True)
+        ]
+        coefficients = coriolis_coefficients(
+            self.regressor, q.val, reference_q.rad, tube, forms, taylor=CORIOLIS_TAYLOR
+        )
         coriolis, coriolis_mismatch = coefficients[: len(lowers)], coefficients[len(lowers) :]
         # d/dt of the nominal torque Y_SL pi0 (held over the period while the reference moves).
         pi0 = Ball.point(self._parameters[0])
@@ -331,9 +328,9 @@ class CellFloor:
         reference_velocity = self._states(batch, 0.0, 0.0, extension)[3]
         # |tau_i| of every plant of the box at r = 0 over the tube (the rigid bodies by the
         # regressor over the parameter hull, the tube by the Jacobian, the drives at their ends).
-        rigid = matvec(center, hull)
-        rigid_along = matvec(tube_jacobian, hull)
-        plant_torque = rigid.magnitude + tube * np.sqrt(np.sum(rigid_along.magnitude**2, axis=1))
+        rigid = self._plant_set.magnitude(center)
+        rigid_along = self._plant_set.magnitude(tube_jacobian)
+        plant_torque = rigid + tube * np.sqrt(np.sum(rigid_along**2, axis=1))
         plant_torque = plant_torque + self.joints.plant_torque(qd_a, qdd_a)
         # The law's nominal torque at r != 0 differs from its value at r = 0 by
         # M0 Kr r - C0(q, r) qd_a = M0 Kr r - C0(q, qd_a) r (+ Ia0 Kr r): per joint at most

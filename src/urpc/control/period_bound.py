@@ -45,7 +45,8 @@ class PeriodBound:
     ) -> tuple[float, dict]:
         """The ultimate bound of ``||e||`` for period ``T`` [s] and disturbance ``d`` [N m] in the
         tube ``||e|| <= tube`` (at most the tube the quantities were enclosed over); the worst
-        piece, with its parts."""
+        piece (the largest floor; among pieces with none, the least margin ``a - b``), with its
+        parts."""
         tube = quantities["tube"] if tube is None else tube
         if tube > quantities["tube"] * (1 + 1e-12):
             raise ValueError("the tube exceeds the one the quantities were enclosed over")
@@ -55,10 +56,9 @@ class PeriodBound:
         for piece_index, p in enumerate(quantities["pieces"]):
             floor, piece_parts = self._piece_floor(T, d, D, quantities, p, tube)
             piece_parts["piece"] = piece_index
-            if floor > worst or not parts:
+            # The worst piece: the largest floor, and among infinite ones the least margin.
+            if not parts or (floor, -piece_parts["margin"]) > (worst, -parts["margin"]):
                 worst, parts = floor, piece_parts
-            if not math.isfinite(floor):
-                break
         return worst, parts
 
     def critical_cells(

@@ -295,7 +295,8 @@ class BallRegressor:
         ``C(q; e_i)`` (the Christoffel symbols are symmetric in their last two indices), so only
         the ``dof (dof + 1) / 2`` pairs ``k <= i`` are evaluated, each by polarization
         ``(c(q, e_k + e_i) - c(q, e_k - e_i)) / 4``, instead of ``dof^2`` (all in one pass, unit
-        parameter rows carried as regressor columns)."""
+        parameter rows carried as regressor columns). With a jet ``q`` (values and their
+        derivatives), a jet of such matrices."""
         n = self.dof
         batch = q.shape[:-1]
         first, second = np.triu_indices(n)
@@ -309,13 +310,16 @@ class BallRegressor:
         ]
         if isinstance(q, Jet):
             values = self._columns(q, columns, parameters, polarize=True)  # batch + (pairs, P, i)
-            models = values.mid.shape[-2]
-            shape = batch + (n, models, n, n)
-            mid, rad = np.zeros(shape), np.zeros(shape)
-            for source, out in ((values.mid, mid), (values.rad, rad)):
-                out[..., first, :, :, second] = np.moveaxis(source, -3, 0)
-                out[..., second, :, :, first] = np.moveaxis(source, -3, 0)
-            return Ball(mid, rad)
+
+            def scatter(part: Ball) -> Ball:
+                shape = batch + (n, part.mid.shape[-2], n, n)
+                mid, rad = np.zeros(shape), np.zeros(shape)
+                for source, out in ((part.mid, mid), (part.rad, rad)):
+                    out[..., first, :, :, second] = np.moveaxis(source, -3, 0)
+                    out[..., second, :, :, first] = np.moveaxis(source, -3, 0)
+                return Ball(mid, rad)
+
+            return Jet(scatter(values.val), scatter(values.dot))
         if not isinstance(parameters, Ball):
             parameters = Ball.point(np.atleast_2d(np.asarray(parameters, dtype=float)))
         B = int(np.prod(batch, dtype=int))
