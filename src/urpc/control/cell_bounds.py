@@ -85,34 +85,36 @@ class OverCell:
 
 
 class CenteredCoriolis:
-    """The Christoffel matrix ``C(q, v; pi)`` over boxes of ``q``, ``v`` and ``pi`` in a form
-    that keeps the structure of each term for norms ``sup ||P C P^T||``: ``C`` is linear in ``v``
-    and in ``pi``, so with ``v = v_c + dv``, ``pi = pi_c + dpi``::
+    """The Christoffel matrix ``C(q, v; pi)`` over boxes of ``q``, ``v`` and a parameter set
+    ``pi = pi_c + sum_j s_j w_j d_j`` (:class:`~urpc.control.parameter_sets.PlantParameters`) in a
+    form that keeps the structure of each term for norms ``sup ||P C P^T||``: ``C`` is linear in
+    ``v`` and in ``pi``, so with ``v = v_c + dv``::
 
-        C = C(q; v_c, pi_c) + sum_k dv_k C(q; e_k, pi_c) + sum_j dpi_j C(q; v_c, e_j)
-            + sum_kj dv_k dpi_j C(q; e_k, e_j)
+        C = C(q; v_c, pi_c) + sum_k dv_k C(q; e_k, pi_c) + sum_j s_j w_j C(q; v_c, d_j)
+            + sum_kj dv_k s_j w_j C(q; e_k, d_j)
 
     each term over the cell's region of ``q`` (:class:`OverCell`: the value at the centre and
-    the derivatives over the box, or a ball of the box), its centre through ``P`` exactly and its
-    radius with absolute values (``|dv_k|``, ``|dpi_j|`` at most the boxes' radii). The bound is
-    affine in the velocity radii: :meth:`coefficients` gives ``(A, B)`` with ``sup ||P C P^T|| <=
-    A + B dv`` for every velocity box of centre ``v_c`` and radii ``dv``, so that a wider velocity
-    box (a larger ``r_max``) costs no new enclosure."""
+    the derivatives over the box, for the first three; a ball of the box for the last, a product
+    of two radii), its centre through ``P`` exactly and its radius with absolute values
+    (``|dv_k|`` at most the velocity box's radii, ``|s_j| <= 1``). The bound is affine in the
+    velocity radii: :meth:`coefficients` gives ``(A, B)`` with ``sup ||P C P^T|| <= A + B dv``
+    for every velocity box of centre ``v_c`` and radii ``dv``, so that a wider velocity box (a
+    larger ``r_max``) costs no new enclosure."""
 
     def __init__(
         self,
-        radii: np.ndarray,
+        weights: np.ndarray,
         center: OverCell,
         per_velocity: OverCell,
         per_parameter: OverCell | None,
         per_both: OverCell | None,
     ):
-        """The four terms over the cells, as :meth:`sharing` encloses them: ``radii`` the
-        parameter box's radii along the shared directions ``e_j`` (zero where this box is exact),
+        """The four terms over the cells, as :meth:`sharing` encloses them: ``weights`` the
+        set's weights ``w_j`` along the shared directions ``d_j`` (zero where it has none),
         ``center`` ``C(q; v_c, pi_c)`` (cells, n, n), ``per_velocity`` ``C(q; e_k, pi_c)`` (cells,
-        k, n, n), ``per_parameter`` ``C(q; v_c, e_j)`` (cells, j, n, n) and ``per_both`` ``C(q;
-        e_k, e_j)`` (cells, k, j, n, n) (``None`` without directions)."""
-        self.pi_rad = radii
+        k, n, n), ``per_parameter`` ``C(q; v_c, d_j)`` (cells, j, n, n) and ``per_both`` ``C(q;
+        e_k, d_j)`` (cells, k, j, n, n) (``None`` without directions)."""
+        self.pi_rad = weights
         self.center, self.per_velocity = center, per_velocity
         self.per_parameter, self.per_both = per_parameter, per_both
 
@@ -121,26 +123,21 @@ class CenteredCoriolis:
         cls,
         regressor: BallRegressor,
         q: Ball,
-        forms: list[tuple[np.ndarray, Ball]],
+        forms: list[tuple[np.ndarray, PlantParameters]],
         taylor: bool = True,
     ) -> list[CenteredCoriolis]:
-        """One form per ``(v_center, parameters)`` over the same box of ``q`` (boxes of any
-        centres and radii: the plant's hull and the mismatch, of each piece of the box). The
-        terms that do not depend on a box's centre or radii are enclosed once for all: ``C(q;
-        e_k, e_j)`` along the union of the boxes' directions, with every centre's ``C(q; e_k,
-        pi_c)``, in one call, and ``C(q; v_c, .)`` of every centre and direction in one call per
-        distinct ``v_c`` (each row is computed as it would be alone, up to the order of
-        rounding). With ``taylor``, each term by its value at the box's centre and its
-        derivatives over the box (:class:`OverCell`), else by a ball of the box."""
+        """One form per ``(v_center, parameters)`` over the same box of ``q`` (sets of any
+        centres and weights: the plant's and the mismatch's, of each piece of the box). The terms
+        that do not depend on a set's centre or weights are enclosed once for all: ``C(q; e_k,
+        d_j)`` along the union of the sets' directions, ``C(q; e_k, pi_c)`` of every centre in
+        one call, and ``C(q; v_c, .)`` of every centre and direction in one call per distinct
+        ``v_c`` (each row is computed as it would be alone, up to the order of rounding). With
+        ``taylor``, the first three terms by their value at the box's centre and their
+        derivatives over the box (:class:`OverCell`), else by balls of the box."""
         keys, directions = shared_directions([parameters for _, parameters in forms])
-        count = len(forms)
         centres = Ball(
             np.stack([parameters.centre.mid for _, parameters in forms]),
             np.stack([parameters.centre.rad for _, parameters in forms]),
-        )
-        rows = Ball(
-            np.concatenate([centres.mid, directions.mid]),
-            np.concatenate([centres.rad, directions.rad]),
         )
         free = keys  # the shared directions (their number)
         cells, n = q.mid.shape
@@ -164,35 +161,25 @@ class CenteredCoriolis:
             def over_cell(function, *arguments) -> OverCell:
                 return OverCell(function(q, *arguments))
 
-        if DIRECTIONS_TAYLOR or not len(free):
-            each = over_cell(lambda x: regressor.christoffel_matrices(x, rows))
-            per_both = each.select((slice(None), slice(count, None))) if len(free) else None
-        else:
-            each = over_cell(lambda x: regressor.christoffel_matrices(x, centres))
-            per_both = OverCell(regressor.christoffel_matrices(q, directions))
+        # C(q; e_k, pi_c) of every centre by its Taylor form; C(q; e_k, d_j), which enters
+        # times the velocity's and the parameters' radii both, by a ball of the box.
+        each = over_cell(lambda x: regressor.christoffel_matrices(x, centres))
+        per_both = OverCell(regressor.christoffel_matrices(q, directions)) if len(free) else None
         by_velocity: dict[bytes, tuple[list[int], np.ndarray]] = {}
         for index, (v_center, _) in enumerate(forms):
             key = np.ascontiguousarray(v_center).tobytes()
             by_velocity.setdefault(key, ([], v_center))[0].append(index)
         centre_terms: dict[int, tuple[OverCell, OverCell | None]] = {}
         for indices, v_center in by_velocity.values():
-            if DIRECTIONS_TAYLOR or not len(free):
-                chosen = Ball(
-                    np.concatenate([centres.mid[indices], directions.mid]),
-                    np.concatenate([centres.rad[indices], directions.rad]),
-                )
-                values = over_cell(
-                    lambda x, v, chosen=chosen: regressor.coriolis_matrices(x, v, chosen),
-                    Ball.point(v_center),
-                )
-                along = values.select((slice(len(indices), None),)) if len(free) else None
-            else:
-                chosen = centres[indices]
-                values = over_cell(
-                    lambda x, v, chosen=chosen: regressor.coriolis_matrices(x, v, chosen),
-                    Ball.point(v_center),
-                )
-                along = OverCell(regressor.coriolis_matrices(q, Ball.point(v_center), directions))
+            chosen = Ball(
+                np.concatenate([centres.mid[indices], directions.mid]),
+                np.concatenate([centres.rad[indices], directions.rad]),
+            )
+            values = over_cell(
+                lambda x, v, chosen=chosen: regressor.coriolis_matrices(x, v, chosen),
+                Ball.point(v_center),
+            )
+            along = values.select((slice(len(indices), None),)) if len(free) else None
             for position, index in enumerate(indices):
                 centre_terms[index] = (values.select((position,)), along)
         return [
@@ -219,18 +206,27 @@ class CenteredCoriolis:
         def through(Q: np.ndarray, X: np.ndarray) -> np.ndarray:
             return spectral_norm(congruent(Q, X))
 
-        def spread(s: np.ndarray) -> np.ndarray:
-            """``sup sum_l |dq_l| s_l`` over the region; ``s``: (cells, l, ...)."""
-            r = radii.reshape(radii.shape + (1,) * (s.ndim - 2))
-            return np.sum(r * s, axis=1) + ball * np.sqrt(np.sum(s * s, axis=1))
+        def entrywise(X: Ball) -> np.ndarray:
+            """``|P X P^T| <= |P X.mid P^T| + |P| X.rad |P|^T`` for every matrix of the ball."""
+            return np.abs(congruent(P, X.mid)) + congruent(absolute, X.rad)
+
+        def spread(N: np.ndarray) -> np.ndarray:
+            """``sup ||P sum_l dq_l X_l P^T||`` over the region, for ``|P X_l P^T| <= N_l``
+            entrywise (``N``: (cells, l, ..., n, n)): entrywise ``sum_l |dq_l| N_l <= sum_l r_l
+            N_l + rho (sum_l N_l^2)^(1/2)`` (Cauchy-Schwarz on the tube's ball), and one norm,
+            since the spectral norm is monotone on non-negative matrices. (Per coordinate,
+            ``sum_l r_l ||N_l|| + rho ||(||N_l||)_l||`` costs ``n`` norms and was never smaller on
+            the UR5.)"""
+            r = radii.reshape(radii.shape + (1,) * (N.ndim - 2))
+            return spectral_norm(np.sum(r * N, axis=1) + ball * np.sqrt(np.sum(N * N, axis=1)))
 
         def structured(X: OverCell) -> np.ndarray:
             out = through(P, X.value.mid) + through(absolute, X.value.rad)
             if X.slopes is not None:
-                out = out + spread(through(P, X.slopes.mid) + through(absolute, X.slopes.rad))
+                out = out + spread(entrywise(X.slopes))
             return out
 
-        def summed_ball(X: Ball, weights: np.ndarray, triangle: bool = True) -> np.ndarray:
+        def summed_ball(X: Ball, weights: np.ndarray) -> np.ndarray:
             """``sup ||P sum_j dpi_j X_j P^T||`` over ``|dpi_j| <= weights_j`` (axis -3 is j).
             The centres: ``|sum_j dpi_j Y_j| <= sum_j w_j |Y_j|`` entrywise (``Y_j = P X_j
             P^T``), and the spectral norm is monotone on non-negative matrices (``||A|| <= |||A|||
@@ -239,7 +235,7 @@ class CenteredCoriolis:
             (non-negative) radii are summed first, ``|| |P| sum_j w_j R_j |P|^T ||``."""
             Y = congruent(P, X.mid)
             centres = spectral_norm(np.einsum("...jab,j->...ab", np.abs(Y), weights))
-            if triangle and len(weights) <= TRIANGLE_DIRECTIONS:
+            if len(weights) <= TRIANGLE_DIRECTIONS:
                 centres = np.minimum(centres, spectral_norm(Y) @ weights)
             radius = np.einsum("...jab,j->...ab", X.rad, weights)
             return centres + through(absolute, radius)
@@ -247,7 +243,8 @@ class CenteredCoriolis:
         def summed(X: OverCell, weights: np.ndarray) -> np.ndarray:
             out = summed_ball(X.value, weights)
             if X.slopes is not None:
-                out = out + spread(summed_ball(X.slopes, weights, triangle=False))
+                # |P sum_j dpi_j X_lj P^T| <= sum_j w_j |P X_lj P^T| entrywise, per coordinate l.
+                out = out + spread(np.einsum("...jab,j->...ab", entrywise(X.slopes), weights))
             return out
 
         constant = structured(self.center)
@@ -261,7 +258,6 @@ class CenteredCoriolis:
 #: Up to this many parameter directions, a Coriolis form's parameter part is also bounded by the
 #: triangle inequality (one norm per direction; it can beat the entrywise sum for a few).
 TRIANGLE_DIRECTIONS = 24
-DIRECTIONS_TAYLOR = True
 
 #: The Coriolis forms are enclosed over at most this many bytes of recursion at a time (their
 #: Christoffel batch grows as ``n^4`` per cell, and ``n^5`` with its derivatives).

@@ -10,6 +10,8 @@ import math
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
 from .cells import CellFloor
 from .certificate_report import dominant_link, lightest_joint
 from .interval import IntervalPassivityController
@@ -51,9 +53,10 @@ class SampledSearch:
     def enclose(self, tube: float, T: float | None = None) -> dict:
         """The cell quantities over the tube ``||e|| <= tube`` with ``||r|| <= r_max``, raising
         ``r_max`` until the bound of ``||r||`` at the least self-consistent tube lies inside it,
-        and, in the tube ``epsilon``, splitting the cells that decide the floor
-        (:meth:`PeriodBound.critical_cells`) while that lowers it by at least
-        :data:`REFINE_GAIN` (or, without a floor, fails on fewer cells or by less)."""
+        and, in the tube ``epsilon``, splitting the cells where an inertia model fails (down to
+        the finest cells), then those that decide the floor (:meth:`PeriodBound.critical_cells`)
+        while that lowers it by at least :data:`REFINE_GAIN` (or, without a floor, fails on fewer
+        cells or by less)."""
         T = self.T if T is None else T
         key = (round(tube, 15), T)
         if key in self._enclosed:
@@ -62,8 +65,17 @@ class SampledSearch:
         best = None
         # Wider tubes are for the report only: the cells are split for the certificate's own.
         rounds = REFINE_ROUNDS if tube == self.epsilon else 0
-        for _ in range(rounds + 1):
+        quantities, r_max = self._consistent(tube, r_max, T)
+        # An inertia model that fails on a cell fails every period: its cells are split first,
+        # down to the finest cells, whatever the floor does.
+        while rounds and self.floor_of.cells < MAX_REFINED_CELLS:
+            invalid = np.flatnonzero(~np.all([p["valid"] for p in quantities["pieces"]], axis=0))
+            if not len(invalid) or not self.floor_of.refine(invalid):
+                break
             quantities, r_max = self._consistent(tube, r_max, T)
+        for round_ in range(rounds + 1):
+            if round_:
+                quantities, r_max = self._consistent(tube, r_max, T)
             floor, parts, rho = self.least_tube(quantities, T)
             score = self._score(quantities, T, floor, parts)
             if rounds == 0 or (best is not None and not score < best * (1 - REFINE_GAIN)):
@@ -99,9 +111,9 @@ class SampledSearch:
         least, parts = self.bound.floor_at(T, self.d, quantities, 0.0)
         if math.isfinite(least):
             return 1e6 + least
-        return 1e12 * (1 + self.bound.failing_cells(T, self.d, quantities)) - parts.get(
-            "margin", -math.inf
-        )
+        margin = parts.get("margin", -math.inf)
+        failing = self.bound.failing_cells(T, self.d, quantities)
+        return 1e12 * (1 + failing) - (margin if math.isfinite(margin) else 0.0)
 
     def least_tube(self, quantities: dict, T: float) -> tuple[float, dict, float]:
         """The least ``rho <= tube`` with ``floor(rho) <= rho`` (the fixed point reached from
