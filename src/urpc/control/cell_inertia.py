@@ -38,6 +38,8 @@ class InertiaModel:
     lam_min: np.ndarray  # lambda_min(M_c), (cells,)
     lam_max: np.ndarray  # lambda_max(M_c), (cells,)
     valid: np.ndarray  # M_c positive definite and eps < 1, (cells,)
+    #: The part of ``eps`` that no narrower cell removes (the tube's first-order term), (cells,).
+    eps_tube: np.ndarray | None = None
 
     @property
     def inverse(self) -> np.ndarray:
@@ -100,7 +102,8 @@ def inertia_model(
         + spectral_norm(absolute @ remainder @ absolute_t)
     )
     eps = spread / floor * (1 + LAPACK_MARGIN) + LAPACK_MARGIN
-    model = InertiaModel(mid, P, eps, lam_min, lam_max, positive & (eps < 1))
+    eps_tube = ball * np.sqrt(np.sum(first * first, axis=-1)) / floor
+    model = InertiaModel(mid, P, eps, lam_min, lam_max, positive & (eps < 1), eps_tube)
     rates = first + spectral_norm(absolute[:, None] @ slope_spread @ absolute_t[:, None])
     return model, rates * (1 + LAPACK_MARGIN) / floor[:, None]
 

@@ -419,6 +419,11 @@ class CellFloor:
                     "gamma_delta": gamma_delta * (1 + LAPACK_MARGIN),
                     "static": {
                         "valid": valid & (lam_L > 0) & (beta > 0),
+                        # Where narrower cells can make the models valid (the tube's own part of
+                        # their relative radius is below 1).
+                        "splittable": np.all(
+                            [m.eps_tube < 1 for m in (nominal, law, lower, upper)], axis=0
+                        ),
                         "lam_L": lam_L, "lam_U": lam_U, "beta": beta, "nu": nu, "K": K,
                         "lag_e": lag_e, "lag_M_e": lag_M_e,
                         "R_links": np.array(per_link).reshape(len(links), 2, cells),

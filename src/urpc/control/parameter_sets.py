@@ -67,10 +67,7 @@ class LinkParameters:
     @property
     def magnitude(self) -> np.ndarray:
         """``|delta|`` over the set, per coordinate (10,)."""
-        return (
-            np.abs(self.centre.mid) + self.centre.rad + self.residual
-            + self.weights @ np.abs(self.directions.mid)
-        )  # fmt: skip
+        return np.abs(self.centre.mid) + self.residual + self.weights @ np.abs(self.directions.mid)
 
     @property
     def residual(self) -> np.ndarray:

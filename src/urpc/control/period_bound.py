@@ -66,12 +66,13 @@ class PeriodBound:
     ) -> np.ndarray:
         """The cells that decide the floor at period ``T`` in the tube ``tube`` (indices along
         the cell axis), the ones to split: on every piece whose floor is within ``share`` of the
-        worst, the cells where an inertia model fails (its box too wide) and those where the
-        contraction margin ``a - b`` is not positive; when none is, the cells within ``share`` of
-        an extreme of a term the floor takes over the cells (the least margin, the largest
-        quasi-static error plus response, pushed deviation and forcing). Failing margins and the
-        terms are left alone where more than :data:`FLAT_FRACTION` of the cells are near (the
-        period, not the cells' width, is then the cause)."""
+        worst, the cells where the contraction margin ``a - b`` is not positive; when none is,
+        the cells within ``share`` of an extreme of a term the floor takes over the cells (the
+        least margin, the largest quasi-static error plus response, pushed deviation and
+        forcing). Failing margins and the terms are left alone where more than
+        :data:`FLAT_FRACTION` of the cells are near (the period, not the cells' width, is then
+        the cause). (Cells whose inertia models fail are split first, by
+        :meth:`~urpc.control.sampled_search.SampledSearch.enclose`.)"""
         d = d + self.joints.coulomb
         D = self.gain(T)
         floors, terms_of = [], []
@@ -83,8 +84,7 @@ class PeriodBound:
         for floor, p, terms in zip(floors, quantities["pieces"], terms_of, strict=True):
             if floor < worst * (1 - share):
                 continue
-            chosen |= ~p["valid"]  # an inertia model too wide over its cell's box
-            failing = p["valid"] & ~(terms["margin"] > 0)
+            failing = p["valid"] & ~(terms["margin"] > 0)  # (invalid models: SampledSearch)
             if failing.any() or not p["valid"].all():
                 near = [failing]
             else:
@@ -126,7 +126,8 @@ class PeriodBound:
         with np.errstate(invalid="ignore"):  # beta = -inf where an inertia model fails
             a = beta * D * T / (D * T + beta * lam_U)
         growth = 0.5 * T * p["metric_rate"]  # the metric M(q) changes within the period
-        b = T * (p["K"] * (0.5 + p["nu"]) + p["coriolis"] + self.joints.damping / lam_L) + growth
+        damping = self.joints.damping / lam_L if self.joints.damping else 0.0
+        b = T * (p["K"] * (0.5 + p["nu"]) + p["coriolis"] + damping) + growth
         sqrt_L, sqrt_U = np.sqrt(lam_L), np.sqrt(lam_U)
         equilibrium = T * (R + 0.5 * T * lag) + V / D
         response = T * d * (q["trace_inverse"] + n / (D * T))

@@ -53,8 +53,8 @@ class SampledSearch:
     def enclose(self, tube: float, T: float | None = None) -> dict:
         """The cell quantities over the tube ``||e|| <= tube`` with ``||r|| <= r_max``, raising
         ``r_max`` until the bound of ``||r||`` at the least self-consistent tube lies inside it,
-        and, in the tube ``epsilon``, splitting the cells where an inertia model fails (down to
-        the finest cells), then those that decide the floor (:meth:`PeriodBound.critical_cells`)
+        and, in the tube ``epsilon``, splitting the cells where an inertia model fails (while
+        that shrinks the time they cover), then those that decide the floor (:meth:`PeriodBound.critical_cells`)
         while that lowers it by at least :data:`REFINE_GAIN` (or, without a floor, fails on fewer
         cells or by less)."""
         T = self.T if T is None else T
@@ -67,10 +67,21 @@ class SampledSearch:
         rounds = REFINE_ROUNDS if tube == self.epsilon else 0
         quantities, r_max = self._consistent(tube, r_max, T)
         # An inertia model that fails on a cell fails every period: its cells are split first,
-        # down to the finest cells, whatever the floor does.
+        # whatever the floor does, while that shrinks the time they cover by a quarter or more
+        # (a model that fails for the tube's sake fails on every half of its cell).
+        failing_time = math.inf
         while rounds and self.floor_of.cells < MAX_REFINED_CELLS:
-            invalid = np.flatnonzero(~np.all([p["valid"] for p in quantities["pieces"]], axis=0))
-            if not len(invalid) or not self.floor_of.refine(invalid):
+            pieces = quantities["pieces"]
+            invalid = np.flatnonzero(
+                np.any([~p["valid"] & p["splittable"] for p in pieces], axis=0)
+            )
+            covered = float(
+                np.sum(quantities["cell_end"][invalid] - quantities["cell_start"][invalid])
+            )
+            if not len(invalid) or covered > 0.75 * failing_time:
+                break
+            failing_time = covered
+            if not self.floor_of.refine(invalid):
                 break
             quantities, r_max = self._consistent(tube, r_max, T)
         for round_ in range(rounds + 1):
