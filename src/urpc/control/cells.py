@@ -223,17 +223,34 @@ class CellFloor:
             return self._cache[key]
         used = [k for k, mask in enumerate(self._active) if mask.any()]
         out = merge_cells(
-            [self._batch_quantities(k, tube, r_max, extension) for k in used],
+            [self._batch_quantities(self._batches[k], k, tube, r_max, extension) for k in used],
             [self._active[k] for k in used],
         )
         out["cell_start"], out["cell_end"] = self.spans()
         self._cache[key] = out
         return out
 
-    def _batch_quantities(self, index: int, tube: float, r_max: float, extension: float) -> dict:
-        """:meth:`quantities` for the cells of one batch."""
-        batch = self._batches[index]
-        enclosed = self._tube_enclosures(index, tube, extension)
+    def quantities_of(self, cells, tube: float, r_max: float, extension: float) -> dict:
+        """:meth:`quantities` of some cells only (indices along the cell axis), not cached:
+        bounds over those cells' times alone (a floor from them is at most the whole
+        reference's)."""
+        merged = [
+            np.concatenate(
+                [getattr(b, name)[m] for b, m in zip(self._batches, self._active, strict=True)]
+            )
+            for name in ("start", "end", "depth", "group")
+        ]
+        batch = CellBatch(*(x[np.asarray(cells, dtype=int)] for x in merged))
+        out = self._batch_quantities(batch, None, tube, r_max, extension)
+        out["cell_start"], out["cell_end"] = batch.start, batch.end
+        return out
+
+    def _batch_quantities(
+        self, batch: CellBatch, index: int | None, tube: float, r_max: float, extension: float
+    ) -> dict:
+        """:meth:`quantities` for the cells of one batch (its enclosures cached under its index
+        in the partition, unless ``None``)."""
+        enclosed = self._tube_enclosures(batch, index, tube, extension)
         _, qd_a, qdd_a, _ = self._states(batch, tube, r_max, extension)
         # The plant's velocity qd = qd_d - ed: the reference's box plus the error's rate, a ball
         # ||ed|| <= ||r|| + ||Kr e|| (componentwise |ed_i| <= ||r|| + Kr_i ||e||).
@@ -284,14 +301,16 @@ class CellFloor:
             )  # fmt: skip
         return out
 
-    def _tube_enclosures(self, index: int, tube: float, extension: float) -> dict:
+    def _tube_enclosures(
+        self, batch: CellBatch, index: int | None, tube: float, extension: float
+    ) -> dict:
         """The enclosures over the tube ``||e|| <= tube`` that do not depend on ``r_max``, for
-        the cells of one batch (cached): inertia models, the mismatch and its rate along the
-        reference, the Coriolis terms as coefficients of the velocity radii."""
+        the cells of one batch (cached under its index, unless ``None``): inertia models, the
+        mismatch and its rate along the reference, the Coriolis terms as coefficients of the
+        velocity radii."""
         key = (index, round(tube, 15), round(extension, 15))
-        if key in self._tube_cache:
+        if index is not None and key in self._tube_cache:
             return self._tube_cache[key]
-        batch = self._batches[index]
         cells = len(batch)
         q, qd_a, qdd_a, _ = self._states(batch, tube, 0.0, extension)
         reference_q = self._states(batch, 0.0, 0.0, extension)[0].val
@@ -434,7 +453,8 @@ class CellFloor:
                     },
                 }
             )  # fmt: skip
-        self._tube_cache[key] = enclosed
+        if index is not None:
+            self._tube_cache[key] = enclosed
         return enclosed
 
     def inertia_figures(self, extension: float) -> dict[str, float]:

@@ -175,11 +175,36 @@ class SampledSearch:
             widest = 10.0 * self.epsilon
             if tube >= widest or self.bound.floor_at(self.T, self.d, quantities, 0.0)[0] > widest:
                 break
+            if self._beyond(quantities, tube * 10.0):
+                break
             tube *= 10.0
         quantities = self.enclose(self.epsilon)
         _, parts = self.bound.floor_at(self.T, self.d, quantities)
         parts.update(tube=self.epsilon, r_max=quantities["r_max"])
         return math.inf, parts, quantities
+
+    def _beyond(self, quantities: dict, tube: float) -> bool:
+        """Whether the tube ``tube`` has no fixed point, from its enclosures over the cells that
+        decide this tube's floor only (a tenth of them, at least 8): the floor over some cells
+        is at most the floor over all, so a floor at ``rho = 0`` beyond the tube (or none) over
+        them holds for the whole reference."""
+        d, T = self.d + self.floor_of.joints.coulomb, self.T
+        D = self.bound.gain(T)
+        score = np.zeros(len(quantities["cell_start"]))
+        for p in quantities["pieces"]:
+            terms = self.bound.cell_terms(T, d, D, quantities, p, quantities["tube"])
+            with np.errstate(divide="ignore", invalid="ignore"):
+                per_cell = terms["slow"] + (
+                    terms["pushed"] / terms["margin"] + terms["forcing"]
+                ) / np.sqrt(np.maximum(terms["lam_L"], 1e-300))
+            per_cell = np.where((terms["margin"] > 0) & p["valid"], per_cell, np.inf)
+            score = np.maximum(score, per_cell)
+        count = min(len(score), max(8, len(score) // 10))
+        cells = np.argsort(score)[::-1][:count]
+        self.say(f"enclosing {count} cells (||e|| <= {tube:.3g}) for the report")
+        r_max = 1.5 * float(self.controller.Kr.max()) * tube + 1e-6
+        subset = self.floor_of.quantities_of(cells, tube, r_max, self.extension)
+        return not self.bound.floor_at(T, self.d, subset, 0.0)[0] <= tube
 
     def max_sample_period(self) -> float:
         """The largest ``T <= 2 T_controller`` with a floor below ``epsilon`` in the tube
