@@ -84,6 +84,27 @@ class OverCell:
         return OverCell(self.value[(slice(None),) + index], slopes)
 
 
+def combined(X: OverCell, combination: tuple, before: tuple) -> OverCell:
+    """``sum_i c_i X[..., row_i, ...]`` for ``combination = ((row_i, c_i), ...)`` with ``c_i =
+    +-1`` (the row's axis after the axes ``before``), in ball arithmetic."""
+
+    def term(row: int, sign: float) -> OverCell:
+        part = X.select(before + (row,))
+        return (
+            part
+            if sign > 0
+            else OverCell(-part.value, None if part.slopes is None else -part.slopes)
+        )
+
+    out = term(*combination[0])
+    for row, sign in combination[1:]:
+        other = term(row, sign)
+        out = OverCell(
+            out.value + other.value, None if out.slopes is None else out.slopes + other.slopes
+        )
+    return out
+
+
 class CenteredCoriolis:
     """The Christoffel matrix ``C(q, v; pi)`` over boxes of ``q``, ``v`` and a parameter set
     ``pi = pi_c + sum_j s_j w_j d_j`` (:class:`~urpc.control.parameter_sets.PlantParameters`) in a
@@ -135,10 +156,24 @@ class CenteredCoriolis:
         ``taylor``, the first three terms by their value at the box's centre and their
         derivatives over the box (:class:`OverCell`), else by balls of the box."""
         keys, directions = shared_directions([parameters for _, parameters in forms])
-        centres = Ball(
-            np.stack([parameters.centre.mid for _, parameters in forms]),
-            np.stack([parameters.centre.rad for _, parameters in forms]),
-        )
+        # The centres' rows: a shifted set's centre is its base's minus the shift, and every
+        # term is linear in the parameters, so it is formed from theirs (rows shared).
+        rows: list[Ball] = []
+
+        def row(x: Ball) -> int:
+            for index, known in enumerate(rows):
+                if np.array_equal(known.mid, x.mid) and np.array_equal(known.rad, x.rad):
+                    return index
+            rows.append(x)
+            return len(rows) - 1
+
+        combinations = [
+            ((row(p.shift[0]), 1.0), (row(Ball.point(p.shift[1])), -1.0))
+            if p.shift is not None
+            else ((row(p.centre), 1.0),)
+            for _, p in forms
+        ]
+        centres = Ball(np.stack([x.mid for x in rows]), np.stack([x.rad for x in rows]))
         free = keys  # the shared directions (their number)
         cells, n = q.mid.shape
         if taylor:
@@ -170,22 +205,24 @@ class CenteredCoriolis:
             key = np.ascontiguousarray(v_center).tobytes()
             by_velocity.setdefault(key, ([], v_center))[0].append(index)
         centre_terms: dict[int, tuple[OverCell, OverCell | None]] = {}
+        count = len(rows)
         for indices, v_center in by_velocity.values():
             chosen = Ball(
-                np.concatenate([centres.mid[indices], directions.mid]),
-                np.concatenate([centres.rad[indices], directions.rad]),
+                np.concatenate([centres.mid, directions.mid]),
+                np.concatenate([centres.rad, directions.rad]),
             )
             values = over_cell(
                 lambda x, v, chosen=chosen: regressor.coriolis_matrices(x, v, chosen),
                 Ball.point(v_center),
             )
-            along = values.select((slice(len(indices), None),)) if len(free) else None
-            for position, index in enumerate(indices):
-                centre_terms[index] = (values.select((position,)), along)
+            along = values.select((slice(count, None),)) if len(free) else None
+            for index in indices:
+                centre_terms[index] = (combined(values, combinations[index], ()), along)
         return [
             cls(
                 parameters.weights_along(keys), centre_terms[index][0],
-                each.select((slice(None), index)), centre_terms[index][1], per_both,
+                combined(each, combinations[index], (slice(None),)), centre_terms[index][1],
+                per_both,
             )
             for index, (_, parameters) in enumerate(forms)
         ]  # fmt: skip

@@ -140,12 +140,15 @@ class PlantParameters:
     directions: Ball
     weights: np.ndarray
     keys: tuple[tuple[str, str], ...]
+    #: For a shifted set, the centre it was shifted from and the shift (``centre = base - by``),
+    #: so that quantities linear in the parameters can be formed from those of the two.
+    shift: tuple[Ball, np.ndarray] | None = None
 
     def shifted(self, by: np.ndarray) -> PlantParameters:
         """The set minus ``by`` (exact parameters, e.g. the nominal: the mismatch's set)."""
         mid = self.centre.mid - by
         rad = self.centre.rad + ROUNDING * (np.abs(mid) + np.abs(by))
-        return dataclasses.replace(self, centre=Ball(mid, rad))
+        return dataclasses.replace(self, centre=Ball(mid, rad), shift=(self.centre, by))
 
     def weights_along(self, keys: tuple[tuple[str, str], ...]) -> np.ndarray:
         """The weights of ``keys``' directions in this set (0 where it has none of them)."""
