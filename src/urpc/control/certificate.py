@@ -9,13 +9,14 @@ paper's law under a hold is never certified. Under a zero-order hold of period `
 implicit law: the discrete-time argument of
 ``docs/sampled-data.md`` §2, every quantity bounded over cells of time, the tube and the box by
 :mod:`urpc.control.cells`. In the metric of the true inertia, with the held loop's equilibrium
-``r* = T M_L^-1 w + w / D`` for a frozen mismatch and ``r = r* + r_d + delta``::
+``r* = T M_L^-1 w + w / D`` for a frozen mismatch, the response ``r_d`` of the frozen plant to the
+disturbance's history, and ``r = r* + r_d + delta``::
 
     ||delta+||_M <= (1 - a + b) ||delta||_M + f + b (||r*||_M + ||r_d||_M)
     a = beta D T / (D T + beta lambda_U)        contraction of the implicit feedback
     b = T (K (1/2 + nu) + Gamma + Gamma_Delta + Dv / lambda_L) + T mu / 2
                                                  Kr, Coriolis, Coriolis mismatch, damping, metric
-    f = sqrt(lambda_U) T ||dr*/dt||               motion of r* within a period
+    f = T ||M^1/2 dr*/dt|| + T ||M^1/2 dr_d/dt||   motion of r* and r_d within a period
     ||r_d|| <= T d tr((T K)^-1)                   the disturbance, any sequence ||d_k|| <= d
 
 Once the adaptive gain reaches its ceiling ``phi_max`` (it does while ``||e|| >= epsilon``, for at
@@ -50,7 +51,9 @@ from .interval import IntervalPassivityController
 #: a default): the certificate cache (:mod:`urpc.control.certificate_cache`) keys every record on
 #: it, so that no certificate of an older argument is ever reused. (The key also holds urpc's
 #: version and a digest of its source.)
-CERTIFICATE_VERSION = 3  # 3: the laws' own arguments; the plant's actuation delay
+CERTIFICATE_VERSION = (
+    4  # 4: cells refined where the floor needs them; Taylor Coriolis forms; zonotopes
+)
 #: The condition a delayed torque fails (the law's delay or the plant's actuation delay).
 DELAY_CONDITION = "actuation delay counted by the argument"
 

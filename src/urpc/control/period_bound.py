@@ -132,9 +132,17 @@ class PeriodBound:
         equilibrium = T * (R + 0.5 * T * lag) + V / D
         response = T * d * (q["trace_inverse"] + n / (D * T))
         rate_M = np.minimum(rate_inverse_M, sqrt_U * rate_inverse)
-        forcing = T * (T * rate_M + sqrt_U * rate / D) * (1 + growth)
         equilibrium_M = T * (RM + 0.5 * T * lag_M) + sqrt_U * V / D
-        response_M = T * d / (np.maximum(a, 1e-300) * sqrt_L)
+        safe_a = np.maximum(a, 1e-300)
+        response_M = T * d / (safe_a * sqrt_L)
+        # The disturbance's response r_d is that of the plant frozen at the sample (any history
+        # of ||d_j|| <= d): it moves as the plant does. In the plant's metric, with
+        # Phi_j = (1 - A)^j T M^-1, ||M^1/2 dPhi_j/dt M^1/2|| <= j (1 - a)^(j - 1) (mu + mu_L) T +
+        # (1 - a)^j mu T (A's rate from M's and from the law's M_L's), summed over the history:
+        # ((mu + mu_L) / a + mu) T d / (a sqrt(lambda_L)) per unit time.
+        mu = p["metric_rate"]
+        response_motion = T * ((mu + q["mu_law"]) / safe_a + mu) * response_M
+        forcing = (T * (T * rate_M + sqrt_U * rate / D) + response_motion) * (1 + growth)
         return {
             "valid": p["valid"],
             "contraction": a,
