@@ -402,3 +402,33 @@ def test_the_floor_only_grows_with_the_tube_and_rho(rr, rr_box, period):
     if floors[0] > 1e-1:  # the skipped tube could not have had a fixed point
         certificate = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
         assert certificate.epsilon_floor == math.inf and not certificate.certified
+
+
+def test_a_reference_that_needs_more_than_the_effort_limits_is_not_certified(rr, rr_box):
+    """The reference alone needs more than a joint's effort on a plant of the box: no
+    controller follows it there, and the certificate says so with the joint, time and plant;
+    the torque it names is Pinocchio's inverse dynamics of that plant at that time."""
+    fast = SinusoidTrajectory(home=(0.0, 0.0), amplitude=(1.0, 1.0), frequency=2.0)
+    controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=1e-4)
+    certificate = certify(controller, fast, duration=1.0, disturbance_bound=1.0)
+    condition = next(
+        c for c in certificate.conditions if "effort" in c.name and "reference" in c.name
+    )
+    assert not condition.holds and not certificate.certified
+    assert condition.value > 1.0 and "joint" in condition.explanation
+    # Independent check: the largest |tau_i| / effort_i of Pinocchio's RNEA over the vertices.
+    effort = rr.model.effortLimit
+    worst = 0.0
+    for k in range(2**rr_box.n_uncertain):
+        plant = rr_box.plant(rr, rr_box.vertex(k))
+        for t in np.linspace(0.0, fast.period(), 401):
+            ref = fast.reference(t)
+            worst = max(
+                worst,
+                float(np.max(np.abs(plant.inverse_dynamics(ref.q, ref.qd, ref.qdd)) / effort)),
+            )
+    assert condition.value == pytest.approx(worst, rel=1e-9)
+    # The paper's reference needs about 385 N m of the 1000 N m: it holds there.
+    paper = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
+    held = next(c for c in paper.conditions if c.name == condition.name)
+    assert held.holds and 0.3 < held.value < 0.5

@@ -41,6 +41,7 @@ from ..wording import count
 from .argument import Condition
 from .base import actuation_delay_of
 from .cells import CellFloor
+from .certificate_report import reference_torque
 from .interval import IntervalPassivityController
 
 #: Version of the argument and of the :class:`Certificate` it returns. Bump it whenever a change
@@ -210,6 +211,9 @@ def certify(
     law = controller.feedback
     argument = law.argument(controller, floor_of, d, progress)
     conditions += argument.conditions
+    reference = reference_torque(controller, trajectory, floor_of.span)
+    if reference is not None:
+        conditions.append(reference)
     floor, figures = argument.floor, argument.figures
     holds = all(c.holds for c in conditions) and floor <= controller.epsilon
     if not holds:

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from .argument import Condition
 from .cells import CellFloor
 from .interval import IntervalPassivityController
 from .period_bound import PeriodBound
@@ -42,6 +43,70 @@ def torque_figures(
             "unclipped torque)"
         )
     return out
+
+
+#: Times of the reference and plants of the box :func:`reference_torque` tries.
+REFERENCE_SAMPLES, REFERENCE_PLANTS = 401, 64
+
+
+def reference_torque(controller, trajectory, span: float) -> Condition | None:
+    """Whether the reference itself can be followed within the URDF's effort limits: the
+    torque ``M(q_d) qdd_d + C(q_d, qd_d) qd_d + g(q_d)`` plus the drives' (armature, damping,
+    friction) at :data:`REFERENCE_SAMPLES` times of ``[0, span]`` [s] on the nominal plant and
+    at most :data:`REFERENCE_PLANTS` vertices of the box (every vertex when there are no more).
+    A sampled torque above a joint's effort proves that this plant cannot follow the reference
+    (no controller can: the condition fails, naming the joint, the time and the plant); below
+    everywhere, the condition holds for the samples tried, which proves nothing more (the
+    commanded torque's bound, :func:`torque_figures`, is the upper side). ``None`` without
+    effort limits."""
+    import pinocchio as pin
+
+    from ..model.joint_dynamics import friction_torque
+    from ..model.regressor_balls import parameters_of
+
+    robot, box = controller.robot, controller.bound.box
+    effort = np.asarray(robot.model.effortLimit, dtype=float)
+    limited = np.isfinite(effort) & (effort > 0)
+    if not np.any(limited):
+        return None
+    count = 2**box.n_uncertain if box.n_uncertain < 30 else math.inf
+    if count <= REFERENCE_PLANTS:
+        vertices = list(range(int(count)))
+    else:  # the all-lower and all-upper corners, then seeded ones
+        rng = np.random.default_rng(0)
+        high = int(min(count, 2**62))
+        vertices = [0, high - 1] + [int(x) for x in rng.integers(0, high, REFERENCE_PLANTS - 2)]
+    plants = [("the nominal plant", box.plant(robot, None))] + [
+        (f"vertex {k} of the box", box.plant(robot, box.vertex(k))) for k in vertices
+    ]
+    times = np.linspace(0.0, span, REFERENCE_SAMPLES)
+    q, qd, qdd = (np.atleast_2d(x) for x in trajectory.evaluate(times))
+    # The rigid bodies by the regressor (the plants share the kinematics), the drives per plant.
+    model, data = robot.model, robot.model.createData()
+    Y = np.stack([
+        pin.computeJointTorqueRegressor(model, data, robot.configuration(q[k]), qd[k], qdd[k])
+        for k in range(len(times))
+    ])  # fmt: skip  # (times, n, 10 n)
+    worst, where = 0.0, None
+    for label, plant in plants:
+        joints = plant.model
+        tau = Y @ parameters_of(plant) + joints.armature * qdd
+        tau = tau + friction_torque(joints.damping, joints.friction, qd)
+        ratio = np.where(limited, np.abs(tau) / np.where(limited, effort, 1.0), 0.0)
+        k, joint = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
+        if ratio[k, joint] > worst:
+            worst = float(ratio[k, joint])
+            where = (int(joint), float(times[k]), label, float(tau[k, joint]))
+    holds = worst <= 1.0
+    explanation = "the reference needs less than the effort limits on the plants tried"
+    if not holds:
+        joint, t, label, tau = where
+        explanation = (
+            f"the reference needs {abs(tau):.4g} N m on joint '{robot.joint_names[joint]}' at "
+            f"t = {t:.3g} s ({label}), above its effort limit {effort[joint]:.4g} N m: no "
+            "controller follows it there; slow the reference down or narrow the box"
+        )
+    return Condition("the reference within the effort limits", holds, worst, 1.0, explanation)
 
 
 #: What each term of the floor is, for the advice.
