@@ -130,7 +130,7 @@ def test_the_inertia_models_hold_pinocchio_over_the_cells_and_the_tube(arm):
     rng = np.random.default_rng(11)
     floor_of.refine(np.arange(20))  # the halves: second derivatives over their first cells
     floor_of.refine(rng.choice(40, 20, replace=False))
-    batch = floor_of._batches[-1]  # quarters of first cells
+    batch = floor_of.partition.batches[-1]  # quarters of first cells
     q = floor_of._states(batch, tube, 0.0, 2 * T)[0].val
     reference_radii = floor_of._states(batch, 0.0, 0.0, 2 * T)[0].val.rad
     models, rates = floor_of._inertia_models(batch, q, reference_radii, tube, 2 * T)

@@ -145,16 +145,15 @@ class CenteredCoriolis:
         regressor: BallRegressor,
         q: Ball,
         forms: list[tuple[np.ndarray, PlantParameters]],
-        taylor: bool = True,
     ) -> list[CenteredCoriolis]:
         """One form per ``(v_center, parameters)`` over the same box of ``q`` (sets of any
         centres and weights: the plant's and the mismatch's, of each piece of the box). The terms
         that do not depend on a set's centre or weights are enclosed once for all: ``C(q; e_k,
         d_j)`` along the union of the sets' directions, ``C(q; e_k, pi_c)`` of every centre in
         one call, and ``C(q; v_c, .)`` of every centre and direction in one call per distinct
-        ``v_c`` (each row is computed as it would be alone, up to the order of rounding). With
-        ``taylor``, the first three terms by their value at the box's centre and their
-        derivatives over the box (:class:`OverCell`), else by balls of the box."""
+        ``v_c`` (each row is computed as it would be alone, up to the order of rounding). The
+        first three terms by their value at the box's centre and their derivatives over the box
+        (:class:`OverCell`), the fourth by a ball of the box."""
         keys, directions = shared_directions([parameters for _, parameters in forms])
         # The centres' rows: a shifted set's centre is its base's minus the shift, and every
         # term is linear in the parameters, so it is formed from theirs (rows shared).
@@ -176,25 +175,20 @@ class CenteredCoriolis:
         centres = Ball(np.stack([x.mid for x in rows]), np.stack([x.rad for x in rows]))
         free = keys  # the shared directions (their number)
         cells, n = q.mid.shape
-        if taylor:
-            # Derivatives along each coordinate l over the box: a jet per direction (the
-            # directions share the value, which the recursion computes once).
-            along = Jet(
-                q.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n))),
-                Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
+        # Derivatives along each coordinate l over the box: a jet per direction (the directions
+        # share the value, which the recursion computes once).
+        along = Jet(
+            q.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n))),
+            Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
+        )
+        centre = Ball.point(q.mid)
+
+        def over_cell(function, *arguments) -> OverCell:
+            spread = tuple(
+                a.map(lambda x: np.broadcast_to(x[:, None], (cells, n) + x.shape[1:]))
+                for a in arguments
             )
-            centre = Ball.point(q.mid)
-
-            def over_cell(function, *arguments) -> OverCell:
-                spread = tuple(
-                    a.map(lambda x: np.broadcast_to(x[:, None], (cells, n) + x.shape[1:]))
-                    for a in arguments
-                )
-                return OverCell(function(centre, *arguments), function(along, *spread).dot)
-        else:
-
-            def over_cell(function, *arguments) -> OverCell:
-                return OverCell(function(q, *arguments))
+            return OverCell(function(centre, *arguments), function(along, *spread).dot)
 
         # C(q; e_k, pi_c) of every centre by its Taylor form; C(q; e_k, d_j), which enters
         # times the velocity's and the parameters' radii both, by a ball of the box.
@@ -306,8 +300,7 @@ def coriolis_coefficients(
     q: Ball,
     radii: np.ndarray,
     ball: float,
-    forms: list[tuple[np.ndarray, Ball, np.ndarray]],
-    taylor: bool = True,
+    forms: list[tuple[np.ndarray, PlantParameters, np.ndarray]],
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """:meth:`CenteredCoriolis.coefficients` of each form ``(v_center, parameters, P)`` of
     :meth:`CenteredCoriolis.sharing` through its factor ``P`` ((cells, n, n)) over the cells'
@@ -317,13 +310,13 @@ def coriolis_coefficients(
     cells, n = q.mid.shape
     rows = len(forms) + len(shared_directions([parameters for _, parameters, _ in forms])[0])
     per_cell = n * (n + 1) // 2 * rows * n * 3 * 8 * 4  # the backward pass's force rows
-    per_cell *= 2 * (n + 1) if taylor else 1  # and the derivatives along each coordinate
+    per_cell *= 2 * (n + 1)  # and the derivatives along each coordinate
     chunk = max(1, int(CORIOLIS_CHUNK_BYTES // max(per_cell, 1)))
     parts: list[list[tuple[np.ndarray, np.ndarray]]] = []
     for start in range(0, cells, chunk):
         part = slice(start, min(cells, start + chunk))
         chunk_forms = [(v[part], parameters) for v, parameters, _ in forms]
-        shared = CenteredCoriolis.sharing(regressor, q[part], chunk_forms, taylor)
+        shared = CenteredCoriolis.sharing(regressor, q[part], chunk_forms)
         parts.append(
             [
                 form.coefficients(P[part], radii[part], ball)

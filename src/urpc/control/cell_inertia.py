@@ -18,6 +18,7 @@ import dataclasses
 import numpy as np
 
 from ..model.regressor_balls import Ball, BallRegressor, Jet
+from .cell_partition import inward, outward
 
 #: Relative margin on every eigenvalue and norm computed by LAPACK from a cell's centre matrices.
 LAPACK_MARGIN = 1e-9
@@ -162,6 +163,53 @@ def curvatures_over(regressor: BallRegressor, boxes: Ball, parameters: np.ndarra
         for start in range(0, len(boxes.mid), chunk)
     ]
     return Ball(np.concatenate([p.mid for p in parts]), np.concatenate([p.rad for p in parts]))
+
+
+def group_curvatures(
+    regressor: BallRegressor, parameters: np.ndarray, boxes: Ball, group: np.ndarray
+) -> tuple[Ball, Ball]:
+    """The boxes of the groups of first cells (the hull of each group's cells' ``boxes``, with a
+    relative slack of ``1e-12`` so that they lie well inside; ``group`` consecutive) and the
+    second derivatives of every model's ``M`` over them (:func:`curvatures_over`)."""
+    starts = np.flatnonzero(np.r_[True, np.diff(group) != 0])
+    lower = np.minimum.reduceat(outward(boxes, -1), starts, axis=0)
+    upper = np.maximum.reduceat(outward(boxes, 1), starts, axis=0)
+    slack = 1e-12 * (np.abs(lower) + np.abs(upper))
+    hull = Ball.hull(lower - slack, upper + slack)
+    return hull, curvatures_over(regressor, hull, parameters)
+
+
+def curvatures_for(
+    regressor: BallRegressor,
+    parameters: np.ndarray,
+    boxes: Ball,
+    curvatures: Ball,
+    q: Ball,
+    group: np.ndarray,
+) -> tuple[Ball, np.ndarray]:
+    """The second derivatives that hold over each cell's box ``q`` (the cells of ``group``) and
+    the index of each cell's: its group's (``boxes``, ``curvatures`` of
+    :func:`group_curvatures`) when the box lies inside it (checked with outward and inward
+    rounding), or, for a cell that sticks out (a half's Taylor box need not lie in its parent's),
+    one of its own around both, appended."""
+    inside = np.all(
+        (outward(q, -1) >= inward(boxes, -1)[group]) & (outward(q, 1) <= inward(boxes, 1)[group]),
+        axis=-1,
+    )
+    if np.all(inside):
+        return curvatures, group
+    outside = np.flatnonzero(~inside)
+    own = Ball.hull(
+        np.minimum(outward(q, -1)[outside], outward(boxes, -1)[group[outside]]),
+        np.maximum(outward(q, 1)[outside], outward(boxes, 1)[group[outside]]),
+    )
+    extra = curvatures_over(regressor, own, parameters)
+    group = group.copy()
+    group[outside] = len(boxes.mid) + np.arange(len(outside))
+    both = Ball(
+        np.concatenate([curvatures.mid, extra.mid]), np.concatenate([curvatures.rad, extra.rad])
+    )
+    return both, group
 
 
 def inertia_models(

@@ -17,12 +17,10 @@ one-period floor over the cells' enclosures is :mod:`urpc.control.period_bound`.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 
-from ..model.ball_arithmetic import U
 from ..model.inertia_bounds import InertiaBounds
 from ..model.regressor_balls import Ball, BallRegressor, Jet, matvec, parameters_of
 from ..trajectories import Trajectory, covered_span
@@ -32,9 +30,11 @@ from .cell_inertia import (
     LAPACK_MARGIN,
     InertiaModel,
     congruence,
-    curvatures_over,
+    curvatures_for,
+    group_curvatures,
     inertia_models,
 )
+from .cell_partition import CellBatch, Partition, merge_cells
 from .interval import IntervalPassivityController
 from .parameter_sets import link_parameters, plant_parameters
 from .sampled_joints import JointTerms
@@ -47,25 +47,6 @@ MIN_CELLS, MAX_CELLS = 8, 4000
 #: The second derivatives of M are enclosed over boxes of this many first cells (more on long
 #: chains).
 CURVATURE_CELLS = 4
-#: The Coriolis forms by their value at each cell's centre and derivatives over its box.
-CORIOLIS_TAYLOR = True
-#: A cell is split at most this many times (its width at least 2^-MAX_DEPTH of its first cell).
-MAX_DEPTH = 5
-
-
-@dataclasses.dataclass(frozen=True)
-class CellBatch:
-    """Cells enclosed together: their spans ``[start, end]`` [s] (before the widening by the
-    period that follows), their refinement depth, and the curvature group of each (the box of
-    first cells whose second derivatives of ``M`` the cell reuses, :meth:`CellFloor.refine`)."""
-
-    start: np.ndarray
-    end: np.ndarray
-    depth: np.ndarray
-    group: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.start)
 
 
 class CellFloor:
@@ -112,17 +93,12 @@ class CellFloor:
             speed = float(np.max(np.abs(np.atleast_2d(trajectory.evaluate(probe)[1]))))
             cells = int(math.ceil(self.span * speed / CELL_MOTION))
         first = int(np.clip(cells, MIN_CELLS, MAX_CELLS))
-        edges = np.linspace(0.0, self.span, first + 1)
         # The second derivatives of M are enclosed over boxes of consecutive first cells (and
         # reused by their halves): one first cell each, (n + 1) / 8 on chains of more than 7
         # links, so that their n (n + 1) / 2 pairs cost what the n first derivatives do and the
         # cost grows as n^3.
         size = max(1, min(CURVATURE_CELLS * math.ceil((self.dof + 1) / 8), first))
-        self._batches = [
-            CellBatch(edges[:-1], edges[1:], np.zeros(first, dtype=int), np.arange(first) // size)
-        ]
-        self._active = [np.ones(first, dtype=bool)]
-        self._generation = 0
+        self.partition = Partition(self.span, first, size)
         # Models: nominal, the law's lower bound, then (lower, upper) per piece.
         self.pieces = split_box(box)
         piece_bounds = [InertiaBounds(robot, piece) for piece in self.pieces]
@@ -142,49 +118,22 @@ class CellFloor:
     @property
     def cells(self) -> int:
         """The number of cells of the partition."""
-        return int(sum(int(mask.sum()) for mask in self._active))
+        return self.partition.count
 
     def spans(self) -> tuple[np.ndarray, np.ndarray]:
         """Every cell's ``[start, end]`` [s] (before widening), in the order of the cell axis of
         :meth:`quantities`."""
-        return tuple(
-            np.concatenate(
-                [getattr(b, side)[m] for b, m in zip(self._batches, self._active, strict=True)]
-            )
-            for side in ("start", "end")
-        )  # type: ignore[return-value]
+        cells = self.partition.cells()
+        return cells.start, cells.end
 
     def refine(self, cells) -> int:
         """Split the given cells (indices along the cell axis of :meth:`quantities`) in two
-        halves each, except those already split :data:`MAX_DEPTH` times; the halves are
-        enclosed when next asked for. Returns how many cells were split."""
-        chosen = np.zeros(self.cells, dtype=bool)
-        chosen[np.asarray(cells, dtype=int)] = True
-        offset, parts = 0, []
-        for batch, active in zip(self._batches, self._active, strict=True):
-            local = np.flatnonzero(active)
-            take = local[chosen[offset : offset + len(local)]]
-            offset += len(local)
-            take = take[batch.depth[take] < MAX_DEPTH]
-            active[take] = False
-            parts.append((batch, take))
-        start = np.concatenate([b.start[t] for b, t in parts])
-        if not len(start):
-            return 0
-        end = np.concatenate([b.end[t] for b, t in parts])
-        depth = np.concatenate([b.depth[t] for b, t in parts]) + 1
-        group = np.concatenate([b.group[t] for b, t in parts])
-        middle = 0.5 * (start + end)
-        self._batches.append(
-            CellBatch(
-                np.concatenate([start, middle]), np.concatenate([middle, end]),
-                np.concatenate([depth, depth]), np.concatenate([group, group]),
-            )
-        )  # fmt: skip
-        self._active.append(np.ones(2 * len(start), dtype=bool))
-        self._generation += 1
-        self._cache.clear()
-        return len(start)
+        halves each (:meth:`Partition.split`); the halves are enclosed when next asked for.
+        Returns how many cells were split."""
+        split = self.partition.split(cells)
+        if split:
+            self._cache.clear()
+        return split
 
     # ------------------------------------------------------------------------- cell boxes
     def _states(
@@ -218,13 +167,14 @@ class CellFloor:
         part) are computed once per batch of cells and do not depend on ``r_max``: only the
         plant's velocity box and the rates do, and they enter affinely, so a new ``r_max``
         costs a recombination only."""
-        key = (round(tube, 15), round(r_max, 12), round(extension, 15), self._generation)
+        partition = self.partition
+        key = (round(tube, 15), round(r_max, 12), round(extension, 15), partition.generation)
         if key in self._cache:
             return self._cache[key]
-        used = [k for k, mask in enumerate(self._active) if mask.any()]
+        used = partition.used()
         out = merge_cells(
-            [self._batch_quantities(self._batches[k], k, tube, r_max, extension) for k in used],
-            [self._active[k] for k in used],
+            [self._batch_quantities(partition.batches[k], k, tube, r_max, extension) for k in used],
+            [partition.active[k] for k in used],
         )
         out["cell_start"], out["cell_end"] = self.spans()
         self._cache[key] = out
@@ -234,13 +184,7 @@ class CellFloor:
         """:meth:`quantities` of some cells only (indices along the cell axis), not cached:
         bounds over those cells' times alone (a floor from them is at most the whole
         reference's)."""
-        merged = [
-            np.concatenate(
-                [getattr(b, name)[m] for b, m in zip(self._batches, self._active, strict=True)]
-            )
-            for name in ("start", "end", "depth", "group")
-        ]
-        batch = CellBatch(*(x[np.asarray(cells, dtype=int)] for x in merged))
+        batch = self.partition.cells()[np.asarray(cells, dtype=int)]
         out = self._batch_quantities(batch, None, tube, r_max, extension)
         out["cell_start"], out["cell_end"] = batch.start, batch.end
         return out
@@ -332,9 +276,7 @@ class CellFloor:
             (qd_a.val.mid, piece_set.shifted(self._parameters[0]), lower.inverse_factor)
             for piece_set, lower in zip(self._piece_sets, lowers, strict=True)
         ]
-        coefficients = coriolis_coefficients(
-            self.regressor, q.val, reference_q.rad, tube, forms, taylor=CORIOLIS_TAYLOR
-        )
+        coefficients = coriolis_coefficients(self.regressor, q.val, reference_q.rad, tube, forms)
         coriolis, coriolis_mismatch = coefficients[: len(lowers)], coefficients[len(lowers) :]
         # d/dt of the nominal torque Y_SL pi0 (held over the period while the reference moves).
         pi0 = Ball.point(self._parameters[0])
@@ -462,9 +404,9 @@ class CellFloor:
         over the cells at ``e = 0``: what Theorem 1 and the paper law's condition need, without
         the mismatch and Coriolis enclosures."""
         lower, upper = math.inf, 0.0
-        for batch, active in zip(self._batches, self._active, strict=True):
-            if not active.any():
-                continue
+        partition = self.partition
+        for index in partition.used():
+            batch, active = partition.batches[index], partition.active[index]
             q, _, _, _ = self._states(batch, 0.0, 0.0, extension)
             models, _ = self._inertia_models(batch, q.val, q.val.rad, 0.0, extension)
             for low, high in zip(models[2::2], models[3::2], strict=True):
@@ -490,42 +432,17 @@ class CellFloor:
         self, batch: CellBatch, q: Ball, tube: float, extension: float
     ) -> tuple[Ball, np.ndarray]:
         """The second derivatives of every model's ``M`` over boxes that hold the cells of a
-        batch, and the box of each cell: its group's (the hull of the group's first cells'
-        boxes, enclosed once per tube), or, for a cell that sticks out of it (a half's Taylor
-        box need not lie in its parent's), one of its own around both."""
+        batch (``q`` their boxes), and the box of each cell (:func:`curvatures_for`), the groups'
+        boxes enclosed once per tube."""
         key = (round(tube, 15), round(extension, 15))
         if key not in self._curvature_cache:
-            first = self._batches[0]
+            first = self.partition.batches[0]
             box = self._states(first, tube, 0.0, extension)[0].val
-            starts = np.flatnonzero(np.r_[True, np.diff(first.group) != 0])
-            lower = np.minimum.reduceat(outward(box, -1), starts, axis=0)
-            upper = np.maximum.reduceat(outward(box, 1), starts, axis=0)
-            slack = 1e-12 * (np.abs(lower) + np.abs(upper))  # the first cells lie well inside
-            boxes = Ball.hull(lower - slack, upper + slack)
-            self._curvature_cache[key] = (
-                boxes,
-                curvatures_over(self.regressor, boxes, self._parameters),
+            self._curvature_cache[key] = group_curvatures(
+                self.regressor, self._parameters, box, first.group
             )
         boxes, curvatures = self._curvature_cache[key]
-        group = batch.group
-        inside = np.all(
-            (outward(q, -1) >= inward(boxes, -1)[group])
-            & (outward(q, 1) <= inward(boxes, 1)[group]),
-            axis=-1,
-        )
-        if np.all(inside):
-            return curvatures, group
-        outside = np.flatnonzero(~inside)
-        own = Ball.hull(
-            np.minimum(outward(q, -1)[outside], outward(boxes, -1)[group[outside]]),
-            np.maximum(outward(q, 1)[outside], outward(boxes, 1)[group[outside]]),
-        )
-        extra = curvatures_over(self.regressor, own, self._parameters)
-        group = group.copy()
-        group[outside] = len(boxes.mid) + np.arange(len(outside))
-        return Ball(
-            np.concatenate([curvatures.mid, extra.mid]), np.concatenate([curvatures.rad, extra.rad])
-        ), group
+        return curvatures_for(self.regressor, self._parameters, boxes, curvatures, q, batch.group)
 
     def _mismatch_parts(self, batch: CellBatch, tube: float, extension: float):
         """``Y_SL`` over each cell of the reference at ``e = 0`` (a ball), and its Jacobian along
@@ -562,37 +479,3 @@ class CellFloor:
             "beta": float(min(np.min(p["beta"]) for p in pieces)),
             "nu": float(max(np.max(p["nu"]) for p in pieces)),
         }
-
-
-#: The entries of :meth:`CellFloor.quantities` whose cell axis is the last (the others': the
-#: first; numbers that are not arrays are the same for every cell).
-LAST_AXIS = frozenset({"R", "RM", "V", "Rs", "R_links"})
-
-
-def merge_cells(outs: list[dict], masks: list[np.ndarray]) -> dict:
-    """One :meth:`CellFloor.quantities` of the batches' (the cells where ``masks`` hold)."""
-
-    def merge(key, values):
-        first = values[0]
-        if isinstance(first, list):
-            return [
-                {k: merge(k, [v[j][k] for v in values]) for k in first[j]}
-                for j in range(len(first))
-            ]
-        if not isinstance(first, np.ndarray) or first.ndim == 0:
-            return first
-        if key in LAST_AXIS:
-            return np.concatenate([v[..., m] for v, m in zip(values, masks, strict=True)], axis=-1)
-        return np.concatenate([v[m] for v, m in zip(values, masks, strict=True)], axis=0)
-
-    return {key: merge(key, [out[key] for out in outs]) for key in outs[0]}
-
-
-def outward(box: Ball, side: int) -> np.ndarray:
-    """The end of a ball on ``side`` (-1 lower, +1 upper), rounded outward (beyond it)."""
-    return box.mid + side * (box.rad * (1 + 4 * U) + 4 * U * np.abs(box.mid))
-
-
-def inward(box: Ball, side: int) -> np.ndarray:
-    """The end of a ball on ``side``, rounded inward (within it)."""
-    return box.mid + side * (box.rad * (1 - 4 * U) - 4 * U * np.abs(box.mid))
