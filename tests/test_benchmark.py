@@ -162,3 +162,19 @@ def test_profile_control_step_of_the_implicit_law():
     times = profile_control_step(["panda"], repeats=3)["panda"]
     for part in ("output", "output_paper_law", "sampled_law", "inertia", "crba", "solve"):
         assert _positive_finite(times[part]), part
+
+
+def test_cli_bench_certificate_prints_the_cost_next_to_the_control_steps(capsys):
+    assert main(["bench", "certificate", "--arms", "chain3", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["certificate"]
+    assert [r["arm"] for r in rows] == ["chain3"] and rows[0]["dof"] == 3
+    row = rows[0]
+    assert row["certify_s"] > 0 and row["steps_s"] > 0
+    assert row["ratio"] == pytest.approx(row["certify_s"] / row["steps_s"])
+    assert row["cells"] >= 8 and isinstance(row["certified"], bool)
+
+
+def test_cli_bench_certificate_refuses_an_unknown_arm(capsys):
+    assert main(["bench", "certificate", "--arms", "atlas"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error:") and "chainN" in err and "ur5" in err

@@ -52,7 +52,7 @@ def register(commands) -> None:
     )
     add_json_argument(p)
     add_progress_argument(p, "no progress lines on stderr")
-    parts = add_subcommands(p, "bench_part", "[bounds|loop]")
+    parts = add_subcommands(p, "bench_part", "[bounds|loop|certificate]")
 
     b = add_command(
         parts,
@@ -97,6 +97,28 @@ def register(commands) -> None:
     )
     _add_robots(lp)
 
+    cp = add_command(
+        parts,
+        "certificate",
+        run_bench_certificate,
+        help="the certificate's CPU time next to 1000 control steps (UR5, Panda, 30-link chain)",
+        description="Time urpc.certify (implicit law, 1 kHz, epsilon 1e-2, a 2 s generic "
+        "reference, the arm's box, d = 2 N m) and 1000 control steps of the same controller, "
+        "in CPU seconds in one process, with their ratio, the cells and the outcome. An arm is "
+        "a shipped robot with its shipped box (ur5, panda, ...) or chainN, a serial chain of N "
+        "revolute joints with +-10 %% masses. The 30-link chain takes minutes; docs/"
+        "performance.md has the figures.",
+        epilog="Run with OPENBLAS_NUM_THREADS=1: the products are small, and BLAS threads cost "
+        "CPU for nothing.",
+    )
+    _add_json(cp)
+    cp.add_argument(
+        "--arms",
+        type=names,
+        metavar="NAMES",
+        help="comma-separated arms (default: ur5,panda,chain30; chainN for an N-link chain)",
+    )
+
 
 def run_bench(args) -> int:
     from ..studies.benchmark import (
@@ -135,6 +157,32 @@ def run_bench_loop(args) -> int:
         args,
         lambda: {"loop_step": {name: loop_latency(name, args.steps) for name in robots}},
         lambda result: format_latency(result["loop_step"]),
+    )
+
+
+def run_bench_certificate(args) -> int:
+    from ..model.catalog import builtin_root
+    from ..studies.benchmark.certificate_cost import (
+        CERTIFICATE_ARMS,
+        certificate_costs,
+        format_certificate_costs,
+    )
+
+    arms = args.arms or list(CERTIFICATE_ARMS)
+    known = {p.name for p in builtin_root().iterdir() if (p / "uncertainty.yaml").is_file()}
+    unknown = [
+        a for a in arms if a not in known and not (a.startswith("chain") and a[5:].isdigit())
+    ]
+    if unknown:
+        raise InputError(
+            f"unknown arm {', '.join(unknown)}; valid: chainN (N joints) or a shipped robot "
+            f"({', '.join(sorted(known))})",
+            field="arms",
+        )
+    return _report(
+        args,
+        lambda: {"certificate": certificate_costs(arms, _progress(args))},
+        lambda result: format_certificate_costs(result["certificate"]),
     )
 
 
