@@ -361,24 +361,6 @@ def _inertia_map(xm, xr, xf, Lm, Lr, Lf):  # pragma: no cover - compiled
             Lr[o, 12 + _L_ROW2[x]] = xr[o, x]
 
 
-@numba.njit(**_JIT)
-def _ball_add_into(dm, dr, df, xm, xr, xf, L):  # pragma: no cover - compiled
-    """``d = d + x`` as a ball sum (``2u |mid|``, ``1 + 8u``); a copy where ``d`` is zero."""
-    for o in range(xf.shape[0]):
-        if not xf[o]:
-            continue
-        if df[o]:
-            for x in range(L):
-                m = dm[o, x] + xm[o, x]
-                dr[o, x] = (dr[o, x] + xr[o, x] + 2 * U * abs(m)) * UP
-                dm[o, x] = m
-        else:
-            df[o] = True
-            for x in range(L):
-                dm[o, x] = xm[o, x]
-                dr[o, x] = xr[o, x]
-
-
 # ============================================================================ the recursion
 @numba.njit(**_JIT)
 def _recursion(
