@@ -23,8 +23,9 @@ REFINE_ROUNDS = 6
 REFINE_GAIN = 0.02
 #: ... and the cells stay at most this many.
 MAX_REFINED_CELLS = 4000
-#: At most this many rounds for the largest period (when it is at least a tenth of the period).
-PERIOD_ROUNDS = 3
+#: At most this many rounds for the largest period (when it is at least a tenth of the period),
+#: while each lengthens it by at least PERIOD_GAIN.
+PERIOD_ROUNDS, PERIOD_GAIN = 3, 0.05
 
 
 class SampledSearch:
@@ -210,7 +211,7 @@ class SampledSearch:
         """The largest ``T <= 2 T_controller`` with a floor below ``epsilon`` in the tube
         ``||e|| <= epsilon`` (the cells' enclosures hold for every period up to ``2 T``); when
         it is at least ``T / 10``, splitting the cells that fail just above it while that
-        lengthens it by at least :data:`REFINE_GAIN` (:data:`PERIOD_ROUNDS` rounds at most)."""
+        lengthens it by at least :data:`PERIOD_GAIN` (:data:`PERIOD_ROUNDS` rounds at most)."""
         quantities = self.enclose(self.epsilon)  # cached from floor()
         self.say("searching the largest sample period")
         best = self._largest_period(quantities)
@@ -230,7 +231,7 @@ class SampledSearch:
             self.say(f"searching the largest sample period ({self.floor_of.cells} cells)")
             quantities, _ = self._consistent(self.epsilon, quantities["r_max"], failing)
             longer = self._largest_period(quantities)
-            if not longer > best * (1 + REFINE_GAIN):
+            if not longer > best * (1 + PERIOD_GAIN):
                 best = max(best, longer)
                 break
             best = longer
