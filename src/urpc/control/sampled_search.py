@@ -67,11 +67,30 @@ class SampledSearch:
         # Wider tubes are for the report only: the cells are split for the certificate's own.
         rounds = REFINE_ROUNDS if tube == self.epsilon else 0
         quantities, r_max = self._consistent(tube, r_max, T)
-        # An inertia model that fails on a cell fails every period: its cells are split first,
-        # whatever the floor does, while that shrinks the time they cover by a quarter or more
-        # (a model that fails for the tube's sake fails on every half of its cell).
+        if rounds:
+            quantities, r_max = self._split_invalid(quantities, tube, r_max, T)
+        for round_ in range(rounds + 1):
+            if round_:
+                quantities, r_max = self._consistent(tube, r_max, T)
+            floor, parts, rho = self.least_tube(quantities, T)
+            score = self._score(quantities, T, floor, parts)
+            if rounds == 0 or (best is not None and not score < best * (1 - REFINE_GAIN)):
+                break
+            best = score if best is None else min(best, score)
+            if not self._split(quantities, T, floor, rho):
+                break
+        self._enclosed[key] = quantities
+        return quantities
+
+    def _split_invalid(
+        self, quantities: dict, tube: float, r_max: float, T: float
+    ) -> tuple[dict, float]:
+        """An inertia model that fails on a cell fails every period: its cells are split first,
+        whatever the floor does, while that shrinks the time they cover by a quarter or more (a
+        model that fails for the tube's sake fails on every half of its cell, and is not
+        split)."""
         failing_time = math.inf
-        while rounds and self.floor_of.cells < MAX_REFINED_CELLS:
+        while self.floor_of.cells < MAX_REFINED_CELLS:
             pieces = quantities["pieces"]
             invalid = np.flatnonzero(
                 np.any([~p["valid"] & p["splittable"] for p in pieces], axis=0)
@@ -85,23 +104,18 @@ class SampledSearch:
             if not self.floor_of.refine(invalid):
                 break
             quantities, r_max = self._consistent(tube, r_max, T)
-        for round_ in range(rounds + 1):
-            if round_:
-                quantities, r_max = self._consistent(tube, r_max, T)
-            floor, parts, rho = self.least_tube(quantities, T)
-            score = self._score(quantities, T, floor, parts)
-            if rounds == 0 or (best is not None and not score < best * (1 - REFINE_GAIN)):
-                break
-            best = score if best is None else min(best, score)
-            cells = self.bound.critical_cells(
-                T, self.d, quantities, rho if math.isfinite(floor) else 0.0
-            )
-            if self.floor_of.cells + len(cells) > MAX_REFINED_CELLS:
-                break
-            if not self.floor_of.refine(cells):
-                break
-        self._enclosed[key] = quantities
-        return quantities
+        return quantities, r_max
+
+    def _split(self, quantities: dict, T: float, floor: float, rho: float) -> bool:
+        """Split the cells that decide the floor at period ``T`` in the tube ``rho`` (at
+        ``rho = 0`` without a floor; :meth:`PeriodBound.critical_cells`); ``False`` when none is
+        split (none can be, or the cells would exceed :data:`MAX_REFINED_CELLS`)."""
+        cells = self.bound.critical_cells(
+            T, self.d, quantities, rho if math.isfinite(floor) else 0.0
+        )
+        if self.floor_of.cells + len(cells) > MAX_REFINED_CELLS:
+            return False
+        return bool(self.floor_of.refine(cells))
 
     def _consistent(self, tube: float, r_max: float, T: float) -> tuple[dict, float]:
         for _ in range(5):
@@ -221,12 +235,7 @@ class SampledSearch:
                 break
             failing = min(self.extension, max(best, self.extension * 1e-4) * (1 + 2 * REFINE_GAIN))
             floor, _, rho = self.least_tube(quantities, failing)
-            cells = self.bound.critical_cells(
-                failing, self.d, quantities, rho if math.isfinite(floor) else 0.0
-            )
-            if self.floor_of.cells + len(cells) > MAX_REFINED_CELLS:
-                break
-            if not self.floor_of.refine(cells):
+            if not self._split(quantities, failing, floor, rho):
                 break
             self.say(f"searching the largest sample period ({self.floor_of.cells} cells)")
             quantities, _ = self._consistent(self.epsilon, quantities["r_max"], failing)
