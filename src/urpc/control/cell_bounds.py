@@ -173,7 +173,6 @@ class CenteredCoriolis:
             for _, p in forms
         ]
         centres = Ball(np.stack([x.mid for x in rows]), np.stack([x.rad for x in rows]))
-        free = keys  # the shared directions (their number)
         cells, n = q.mid.shape
         # Derivatives along each coordinate l over the box: a jet per direction (the directions
         # share the value, which the recursion computes once).
@@ -193,7 +192,7 @@ class CenteredCoriolis:
         # C(q; e_k, pi_c) of every centre by its Taylor form; C(q; e_k, d_j), which enters
         # times the velocity's and the parameters' radii both, by a ball of the box.
         each = over_cell(lambda x: regressor.christoffel_matrices(x, centres))
-        per_both = OverCell(regressor.christoffel_matrices(q, directions)) if len(free) else None
+        per_both = OverCell(regressor.christoffel_matrices(q, directions)) if keys else None
         by_velocity: dict[bytes, tuple[list[int], np.ndarray]] = {}
         for index, (v_center, _) in enumerate(forms):
             key = np.ascontiguousarray(v_center).tobytes()
@@ -209,7 +208,7 @@ class CenteredCoriolis:
                 lambda x, v, chosen=chosen: regressor.coriolis_matrices(x, v, chosen),
                 Ball.point(v_center),
             )
-            along = values.select((slice(count, None),)) if len(free) else None
+            along = values.select((slice(count, None),)) if keys else None
             for index in indices:
                 centre_terms[index] = (combined(values, combinations[index], ()), along)
         return [
