@@ -113,6 +113,7 @@ class CellFloor:
         self._cache: dict[tuple, dict] = {}
         self._tube_cache: dict[tuple, dict] = {}
         self._curvature_cache: dict[tuple, Ball] = {}
+        self._model_cache: dict[tuple, tuple] = {}
 
     # ------------------------------------------------------------------------- the partition
     @property
@@ -258,7 +259,7 @@ class CellFloor:
         cells = len(batch)
         q, qd_a, qdd_a, _ = self._states(batch, tube, 0.0, extension)
         reference_q = self._states(batch, 0.0, 0.0, extension)[0].val
-        models, model_slopes = self._inertia_models(batch, q.val, reference_q.rad, tube, extension)
+        models, model_slopes = self._batch_models(batch, index, tube, extension)
         nominal, law = models[0], models[1]
         # d/dt w = (rate along the reference at a fixed e) + (Jacobian along e) ed.
         reference = self._states(batch, tube, 0.0, extension, along_reference=True)
@@ -399,22 +400,61 @@ class CellFloor:
             self._tube_cache[key] = enclosed
         return enclosed
 
-    def inertia_figures(self, extension: float) -> dict[str, float]:
-        """Only ``lambda_L`` (the lightest mode of every piece's lower bound) and ``lambda_U``
-        over the cells at ``e = 0``: what Theorem 1 and the paper law's condition need, without
-        the mismatch and Coriolis enclosures."""
+    def _batch_models(
+        self, batch: CellBatch, index: int | None, tube: float, extension: float
+    ) -> tuple[list[InertiaModel], list[np.ndarray]]:
+        """Every inertia model over the cells of one batch and the tube (cached under its index,
+        unless ``None``)."""
+        key = (index, round(tube, 15), round(extension, 15))
+        if index is not None and key in self._model_cache:
+            return self._model_cache[key]
+        q = self._states(batch, tube, 0.0, extension)[0].val
+        reference_radii = self._states(batch, 0.0, 0.0, extension)[0].val.rad
+        out = self._inertia_models(batch, q, reference_radii, tube, extension)
+        if index is not None:
+            self._model_cache[key] = out
+        return out
+
+    def model_validity(self, tube: float, extension: float) -> tuple[np.ndarray, np.ndarray]:
+        """Per cell of the partition (the cell axis of :meth:`quantities`), whether every
+        inertia model holds over it and the tube (nominal, the law's ``M_L``, each piece's
+        ``M_L`` and ``M_U``: ``M_c`` positive definite and ``eps < 1``), and whether a narrower
+        cell could make the failing ones hold (the tube's own part of ``eps`` is below 1).
+        Only the inertia models are enclosed (cached for :meth:`quantities`): a cell where one
+        fails has no floor at any period, whatever the rest."""
+        valid, splittable = [], []
+        partition = self.partition
+        for index in partition.used():
+            batch, active = partition.batches[index], partition.active[index]
+            models, _ = self._batch_models(batch, index, tube, extension)
+            valid.append(np.all([m.valid for m in models], axis=0)[active])
+            splittable.append(np.all([m.eps_tube < 1 for m in models], axis=0)[active])
+        return np.concatenate(valid), np.concatenate(splittable)
+
+    def model_figures(self, tube: float, extension: float) -> dict[str, float]:
+        """:meth:`figures` from the inertia models alone, for a partition where one fails
+        (``beta`` ``-inf`` and ``nu`` ``inf``: they are not bounded there)."""
         lower, upper = math.inf, 0.0
         partition = self.partition
         for index in partition.used():
             batch, active = partition.batches[index], partition.active[index]
-            q, _, _, _ = self._states(batch, 0.0, 0.0, extension)
-            models, _ = self._inertia_models(batch, q.val, q.val.rad, 0.0, extension)
+            models, _ = self._batch_models(batch, index, tube, extension)
             for low, high in zip(models[2::2], models[3::2], strict=True):
                 lam_L = np.where(low.valid, low.lam_min * (1 - low.eps), -math.inf)[active]
                 lower = min(lower, float(np.min(lam_L)) * (1 - LAPACK_MARGIN))
                 high_U = (high.lam_max * (1 + high.eps))[active]
                 upper = max(upper, float(np.max(high_U)) * (1 + LAPACK_MARGIN))
-        return {"cells": float(self.cells), "lambda_L": lower, "lambda_U": upper}
+        return {
+            "cells": float(self.cells), "pieces": float(len(self.pieces)),
+            "lambda_L": lower, "lambda_U": upper, "beta": -math.inf, "nu": math.inf,
+        }  # fmt: skip
+
+    def inertia_figures(self, extension: float) -> dict[str, float]:
+        """Only ``lambda_L`` (the lightest mode of every piece's lower bound) and ``lambda_U``
+        over the cells at ``e = 0``: what Theorem 1 and the paper law's condition need, without
+        the mismatch and Coriolis enclosures."""
+        figures = self.model_figures(0.0, extension)
+        return {name: figures[name] for name in ("cells", "lambda_L", "lambda_U")}
 
     def _inertia_models(
         self, batch: CellBatch, q: Ball, reference_radii: np.ndarray, tube: float, extension: float

@@ -136,6 +136,13 @@ def advice(
     term = figures.get("dominant_term")
     if "invalid_cell" in figures:
         start = figures.get("invalid_time", math.nan)
+        if figures.get("invalid_for_tube"):
+            return (
+                text + f"; the inertia bounds fail on the cell that starts at t = {start:.3g} s "
+                "for the tube's sake: the inertia changes more over ||e|| <= epsilon alone "
+                "than the bounds allow (no narrower cell helps): a smaller epsilon, or "
+                "narrower mass and inertia intervals"
+            )
         return (
             text + f"; the inertia bounds fail on the cell that starts at t = {start:.3g} s "
             "(M_L not positive definite or beta <= 0 over that cell's box of q and the "

@@ -178,7 +178,10 @@ class ImplicitFeedback(FeedbackLaw):
         search = SampledSearch(floor_of, controller, d, progress)
         floor, parts, quantities = search.floor()
         max_period = search.max_sample_period() if math.isfinite(d) else 0.0
-        figures = {**floor_of.figures(quantities), **parts}
+        if search.failing_cell is not None:  # only the inertia models were enclosed
+            figures = {**floor_of.model_figures(controller.epsilon, search.extension), **parts}
+        else:
+            figures = {**floor_of.figures(quantities), **parts}
         figures.update(search.report(floor, parts, quantities))
         if math.isfinite(floor):
             figures.update(torque_figures(search.bound, controller, d, quantities, parts))

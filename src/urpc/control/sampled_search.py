@@ -50,6 +50,8 @@ class SampledSearch:
         self.extension = 2.0 * self.T
         self.epsilon = controller.epsilon
         self._enclosed: dict[tuple, dict] = {}  # (tube, T): the quantities of the last partition
+        #: A cell where an inertia model fails over the tube epsilon (then no period has a floor).
+        self.failing_cell: int | None = None
 
     def enclose(self, tube: float, T: float | None = None) -> dict:
         """The cell quantities over the tube ``||e|| <= tube`` with ``||r|| <= r_max``, raising
@@ -67,8 +69,6 @@ class SampledSearch:
         # Wider tubes are for the report only: the cells are split for the certificate's own.
         rounds = REFINE_ROUNDS if tube == self.epsilon else 0
         quantities, r_max = self._consistent(tube, r_max, T)
-        if rounds:
-            quantities, r_max = self._split_invalid(quantities, tube, r_max, T)
         for round_ in range(rounds + 1):
             if round_:
                 quantities, r_max = self._consistent(tube, r_max, T)
@@ -82,29 +82,31 @@ class SampledSearch:
         self._enclosed[key] = quantities
         return quantities
 
-    def _split_invalid(
-        self, quantities: dict, tube: float, r_max: float, T: float
-    ) -> tuple[dict, float]:
-        """An inertia model that fails on a cell fails every period: its cells are split first,
-        whatever the floor does, while that shrinks the time they cover by a quarter or more (a
-        model that fails for the tube's sake fails on every half of its cell, and is not
-        split)."""
+    def _split_invalid(self) -> tuple[int, bool] | None:
+        """An inertia model that fails on a cell fails every period (no floor anywhere, whatever
+        the rest): the cells where one fails over the tube ``epsilon`` are split first, from the
+        inertia models alone, while that shrinks the time they cover by a quarter or more (a
+        model that fails for the tube's sake fails on every half of its cell, and is not split).
+        Returns a cell where one still fails (an index along the cell axis) and whether it
+        fails for the tube's sake, or ``None``."""
         failing_time = math.inf
-        while self.floor_of.cells < MAX_REFINED_CELLS:
-            pieces = quantities["pieces"]
-            invalid = np.flatnonzero(
-                np.any([~p["valid"] & p["splittable"] for p in pieces], axis=0)
-            )
-            covered = float(
-                np.sum(quantities["cell_end"][invalid] - quantities["cell_start"][invalid])
-            )
-            if not len(invalid) or covered > 0.75 * failing_time:
-                break
+        while True:
+            self.say(f"enclosing the inertia models over {self.floor_of.cells} cells")
+            valid, splittable = self.floor_of.model_validity(self.epsilon, self.extension)
+            if valid.all():
+                return None
+            invalid = np.flatnonzero(~valid & splittable)
+            starts, ends = self.floor_of.spans()
+            covered = float(np.sum(ends[invalid] - starts[invalid]))
+            if (
+                not len(invalid)
+                or covered > 0.75 * failing_time
+                or self.floor_of.cells + len(invalid) > MAX_REFINED_CELLS
+                or not self.floor_of.refine(invalid)
+            ):
+                cell = int(np.flatnonzero(~valid)[0])
+                return cell, not bool(splittable[cell])
             failing_time = covered
-            if not self.floor_of.refine(invalid):
-                break
-            quantities, r_max = self._consistent(tube, r_max, T)
-        return quantities, r_max
 
     def _split(self, quantities: dict, T: float, floor: float, rho: float) -> bool:
         """Split the cells that decide the floor at period ``T`` in the tube ``rho`` (at
@@ -180,6 +182,15 @@ class SampledSearch:
         if not math.isfinite(self.d):
             quantities = self.floor_of.quantities(tube, 0.0, self.extension)
             return math.inf, {"margin": -math.inf}, quantities
+        failing = self._split_invalid()
+        if failing is not None:  # no floor at any period: the rest is not enclosed
+            self.failing_cell, for_tube = failing
+            starts = self.floor_of.spans()[0]
+            parts = {
+                "margin": -math.inf, "invalid_cell": self.failing_cell, "tube": tube,
+                "invalid_for_tube": for_tube,
+            }  # fmt: skip
+            return math.inf, parts, {"cell_start": starts}
         while True:
             quantities = self.enclose(tube)
             floor, parts, rho = self.least_tube(quantities, self.T)
@@ -226,6 +237,8 @@ class SampledSearch:
         ``||e|| <= epsilon`` (the cells' enclosures hold for every period up to ``2 T``); when
         it is at least ``T / 10``, splitting the cells that fail just above it while that
         lengthens it by at least :data:`PERIOD_GAIN` (:data:`PERIOD_ROUNDS` rounds at most)."""
+        if self.failing_cell is not None:  # an inertia model fails at every period
+            return 0.0
         quantities = self.enclose(self.epsilon)  # cached from floor()
         self.say("searching the largest sample period")
         best = self._largest_period(quantities)
