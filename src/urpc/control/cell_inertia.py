@@ -40,7 +40,7 @@ class InertiaModel:
     lam_max: np.ndarray  # lambda_max(M_c), (cells,)
     valid: np.ndarray  # M_c positive definite and eps < 1, (cells,)
     #: The part of ``eps`` that no narrower cell removes (the tube's first-order term), (cells,).
-    eps_tube: np.ndarray | None = None
+    eps_tube: np.ndarray
 
     @property
     def inverse(self) -> np.ndarray:

@@ -94,9 +94,9 @@ class CellFloor:
             cells = int(math.ceil(self.span * speed / CELL_MOTION))
         first = int(np.clip(cells, MIN_CELLS, MAX_CELLS))
         # The second derivatives of M are enclosed over boxes of consecutive first cells (and
-        # reused by their halves): one first cell each, (n + 1) / 8 on chains of more than 7
-        # links, so that their n (n + 1) / 2 pairs cost what the n first derivatives do and the
-        # cost grows as n^3.
+        # reused by their halves): CURVATURE_CELLS of them, times (n + 1) / 8 on chains of more
+        # than 7 links, so that their n (n + 1) / 2 pairs cost what the n first derivatives do
+        # and the cost grows as n^3 (a second-order term: a coarser box costs little).
         size = max(1, min(CURVATURE_CELLS * math.ceil((self.dof + 1) / 8), first))
         self.partition = Partition(self.span, first, size)
         # Models: nominal, the law's lower bound, then (lower, upper) per piece.
@@ -381,11 +381,6 @@ class CellFloor:
                     "gamma_delta": gamma_delta * (1 + LAPACK_MARGIN),
                     "static": {
                         "valid": valid & (lam_L > 0) & (beta > 0),
-                        # Where narrower cells can make the models valid (the tube's own part of
-                        # their relative radius is below 1).
-                        "splittable": np.all(
-                            [m.eps_tube < 1 for m in (nominal, law, lower, upper)], axis=0
-                        ),
                         "lam_L": lam_L, "lam_U": lam_U, "beta": beta, "nu": nu, "K": K,
                         "lag_e": lag_e, "lag_M_e": lag_M_e,
                         "R_links": np.array(per_link).reshape(len(links), 2, cells),

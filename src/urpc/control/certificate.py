@@ -52,9 +52,9 @@ from .interval import IntervalPassivityController
 #: a default): the certificate cache (:mod:`urpc.control.certificate_cache`) keys every record on
 #: it, so that no certificate of an older argument is ever reused. (The key also holds urpc's
 #: version and a digest of its source.)
-CERTIFICATE_VERSION = (
-    4  # 4: cells refined where the floor needs them; Taylor Coriolis forms; zonotopes
-)
+#: 4: cells refined where the floor needs them, Taylor Coriolis forms, zonotopes, the motion of
+#: the disturbance's response, the reference within the effort limits.
+CERTIFICATE_VERSION = 4
 #: The condition a delayed torque fails (the law's delay or the plant's actuation delay).
 DELAY_CONDITION = "actuation delay counted by the argument"
 

@@ -26,8 +26,7 @@ def torque_figures(
     joint, in ``torque_note`` and the summary."""
     T = controller.sample_period
     bound = period_bound.torque_bound(T, d, quantities, parts["tube"], parts["r_sup"])
-    effort = np.asarray(controller.robot.model.effortLimit, dtype=float)
-    limited = np.isfinite(effort) & (effort > 0)
+    effort, limited = effort_limits(controller.robot)
     out: dict[str, Any] = {"torque_bound": bound.tolist(), "torques_within_limits": True}
     if not np.any(limited):
         out["torques_within_limits"] = None
@@ -43,6 +42,13 @@ def torque_figures(
             "unclipped torque)"
         )
     return out
+
+
+def effort_limits(robot) -> tuple[np.ndarray, np.ndarray]:
+    """The URDF's effort limits [N m or N] and which joints have one (a non-positive or
+    infinite limit counts as none)."""
+    effort = np.asarray(robot.effort_limit, dtype=float)
+    return effort, np.isfinite(effort) & (effort > 0)
 
 
 #: Times of the reference and plants of the box :func:`reference_torque` tries.
@@ -65,8 +71,7 @@ def reference_torque(controller, trajectory, span: float) -> Condition | None:
     from ..model.regressor_balls import parameters_of
 
     robot, box = controller.robot, controller.bound.box
-    effort = np.asarray(robot.model.effortLimit, dtype=float)
-    limited = np.isfinite(effort) & (effort > 0)
+    effort, limited = effort_limits(robot)
     if not np.any(limited):
         return None
     count = 2**box.n_uncertain if box.n_uncertain < 30 else math.inf

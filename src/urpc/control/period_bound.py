@@ -71,8 +71,8 @@ class PeriodBound:
         least margin, the largest quasi-static error plus response, pushed deviation and
         forcing). Failing margins and the terms are left alone where more than
         :data:`FLAT_FRACTION` of the cells are near (the period, not the cells' width, is then
-        the cause). (Cells whose inertia models fail are split first, by
-        :meth:`~urpc.control.sampled_search.SampledSearch.enclose`.)"""
+        the cause). (Cells whose inertia models fail are split before, by
+        :meth:`~urpc.control.sampled_search.SampledSearch.floor`.)"""
         d = d + self.joints.coulomb
         D = self.gain(T)
         floors, terms_of = [], []
@@ -84,7 +84,7 @@ class PeriodBound:
         for floor, p, terms in zip(floors, quantities["pieces"], terms_of, strict=True):
             if floor < worst * (1 - share):
                 continue
-            failing = p["valid"] & ~(terms["margin"] > 0)  # (invalid models: SampledSearch)
+            failing = p["valid"] & ~(terms["margin"] > 0)
             if failing.any() or not p["valid"].all():
                 near = [failing]
             else:

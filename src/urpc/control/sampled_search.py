@@ -56,10 +56,10 @@ class SampledSearch:
     def enclose(self, tube: float, T: float | None = None) -> dict:
         """The cell quantities over the tube ``||e|| <= tube`` with ``||r|| <= r_max``, raising
         ``r_max`` until the bound of ``||r||`` at the least self-consistent tube lies inside it,
-        and, in the tube ``epsilon``, splitting the cells where an inertia model fails (while
-        that shrinks the time they cover), then those that decide the floor (:meth:`PeriodBound.critical_cells`)
-        while that lowers it by at least :data:`REFINE_GAIN` (or, without a floor, fails on fewer
-        cells or by less)."""
+        and, in the tube ``epsilon``, splitting the cells that decide the floor
+        (:meth:`PeriodBound.critical_cells`) while that lowers it by at least
+        :data:`REFINE_GAIN` (or, without a floor, fails on fewer cells or by less). The cells
+        where an inertia model fails are split before (:meth:`floor`, :meth:`_split_invalid`)."""
         T = self.T if T is None else T
         key = (round(tube, 15), T)
         if key in self._enclosed:
@@ -177,7 +177,9 @@ class SampledSearch:
         ``rho`` is at least this tube's floor at ``rho = 0`` (the floor grows with ``rho`` and
         with the boxes it is bounded over); when that exceeds ``10 epsilon`` (or is ``inf``: the
         contraction ``a > b`` or the inertia bounds fail), the answer is ``inf`` without the
-        second enclosure, half the cost of an uncertified period."""
+        second enclosure, half the cost of an uncertified period. The inertia models come
+        first (:meth:`_split_invalid`): where one fails for good, no period has a floor, and
+        nothing else is enclosed (the quantities returned are then the cells' starts only)."""
         tube = self.epsilon
         if not math.isfinite(self.d):
             quantities = self.floor_of.quantities(tube, 0.0, self.extension)
