@@ -11,7 +11,8 @@ import dataclasses
 import numpy as np
 
 from ..model.regressor_balls import Ball, BallRegressor, Jet
-from .cell_inertia import LAPACK_MARGIN, InertiaModel, safe_cholesky, spectral_norm
+from ..model.verified_norms import spectral_norm
+from .cell_inertia import LAPACK_MARGIN, InertiaModel, safe_cholesky
 from .parameter_sets import LinkParameters, PlantParameters
 
 

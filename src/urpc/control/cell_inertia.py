@@ -18,6 +18,7 @@ import dataclasses
 import numpy as np
 
 from ..model.regressor_balls import Ball, BallRegressor, Jet
+from ..model.verified_norms import spectral_norm
 from .cell_partition import inward, outward
 
 #: Relative margin on every eigenvalue and norm computed by LAPACK from a cell's centre matrices.
@@ -127,18 +128,6 @@ def taylor_terms(
         spread[members] = np.einsum("cj,kjmab->ckmab", w[members], magnitude[box])
     remainder = 0.5 * np.einsum("ck,ckmab->cmab", w, spread)
     return remainder * (1 + 1e-12), spread * (1 + 1e-12)
-
-
-def spectral_norm(X: np.ndarray) -> np.ndarray:
-    """Spectral norm of each matrix of a batch (symmetric or not): the square root of the largest
-    eigenvalue of its Gram matrix ``X^T X`` (or ``X X^T``, the smaller), half the cost of an SVD.
-    Forming the Gram matrix in floating point moves that eigenvalue by at most ``n^2 u ||X||^2``
-    (``n`` the larger dimension), far inside the callers' relative margin
-    :data:`LAPACK_MARGIN`."""
-    rows, columns = X.shape[-2:]
-    Xt = np.swapaxes(X, -1, -2)
-    gram = Xt @ X if rows >= columns else X @ Xt
-    return np.sqrt(np.maximum(np.linalg.eigvalsh(gram)[..., -1], 0.0))
 
 
 def congruence(P: np.ndarray, A: np.ndarray) -> np.ndarray:
