@@ -176,6 +176,8 @@ def _diverging_scenario(tmp_path: Path) -> Path:
     "argv, message",
     [
         (["simulate", "no/such/scenario.yaml"], "no such scenario file"),
+        (["simulate", "ur10"], "'ur10' is a robot, not a scenario: give it as --robot ur10 and"),
+        (["certify", "ur5"], "give it as --robot ur5, or one of its shipped scenarios: ur5/"),
         (["simulate", "rr_planar/s2_ic1", "--epsilon", "-1"], "field 'epsilon'"),
         (["simulate", "rr_planar/s2_ic1", "--epsilon", "tiny"], "not a finite number"),
         (["simulate", "rr_planar/s2_ic1", "--controller", "pid"], "--controller: invalid choice: 'pid'"),

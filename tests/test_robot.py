@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -155,6 +157,15 @@ def test_a_mimic_joint_is_refused_unless_locked_with_its_leader():
     with pytest.raises(InputError, match="lock both"):
         load_robot("panda", locked_joints=["panda_finger_joint2"])
     assert load_robot("panda", locked_joints=PANDA_FINGERS).dof == 7
+
+
+def test_every_mimic_pair_is_in_the_suggested_lock_list():
+    """Baxter has a mimic pair per gripper: one suggestion covers both (and works as given)."""
+    with pytest.raises(InputError) as caught:
+        load_robot("baxter")
+    suggested = re.search(r"--lock (\w+(?:,\w+)*)", str(caught.value)).group(1).split(",")
+    assert len(suggested) == 4 and "1 more mimic pair is in that list" in str(caught.value)
+    assert load_robot("baxter", locked_joints=suggested).dof == 15
 
 
 def test_a_mimic_joint_in_a_urdf_file_names_file_and_joint(tmp_path):

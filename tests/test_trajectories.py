@@ -122,6 +122,32 @@ def test_generic_sinusoid_slows_down_for_tight_velocity_limits(rr):
     np.testing.assert_allclose(slow.reference(0.0).qd, 0.0, atol=1e-15)
 
 
+def test_a_joint_with_an_empty_range_is_held_still_with_a_warning(tmp_path):
+    """A URDF that writes ``lower = upper = 0`` (example-robot-data's double_pendulum): the
+    generic reference cannot move that joint, and says so instead of tracking a flat line."""
+    import urpc
+
+    urdf = tmp_path / "pendulum.urdf"
+    urdf.write_text(
+        '<robot name="pendulum"><link name="base"/>'
+        '<joint name="free" type="revolute"><parent link="base"/><child link="a"/>'
+        '<axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="10" velocity="2"/></joint>'
+        '<link name="a"><inertial><mass value="1"/><origin xyz="0 0 0.1"/>'
+        '<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>'
+        '<joint name="stuck" type="revolute"><parent link="a"/><child link="b"/>'
+        '<origin xyz="0 0 0.2"/><axis xyz="0 1 0"/>'
+        '<limit lower="0" upper="0" effort="0" velocity="0"/></joint>'
+        '<link name="b"><inertial><mass value="1"/><origin xyz="0 0 0.1"/>'
+        '<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>'
+        "</robot>"
+    )
+    robot = urpc.load_robot(urdf)
+    with pytest.warns(UserWarning, match=r"holds joints \['stuck'\] still"):
+        trajectory = generic_trajectory(robot)
+    states = [trajectory.reference(t).q for t in np.linspace(0.0, 4.0, 9)]
+    assert np.ptp([q[0] for q in states]) > 0.1 and np.ptp([q[1] for q in states]) == 0.0
+
+
 def test_invalid_trajectories(rr):
     with pytest.raises(InputError, match="valid: sinusoid, quintic"):
         generic_trajectory(rr, "circle")

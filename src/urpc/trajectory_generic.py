@@ -4,6 +4,7 @@ scenario (:func:`generic_trajectory`; the trajectory families are :mod:`urpc.tra
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -48,6 +49,9 @@ def generic_trajectory(
     ``quintic``: rest-to-rest segments ``home -> home + A -> home - A -> home`` (alternate signs on
     alternate joints), each lasting ``segment_duration`` [s] or longer if the speed requires it.
 
+    A joint whose range is empty (lower limit = upper limit, as some URDFs write for joints they
+    do not limit) is held still, with a warning that names it.
+
     Raises:
         InputError: unknown ``kind`` or out-of-range fractions, or a home outside the limits.
     """
@@ -72,6 +76,15 @@ def generic_trajectory(
     margin = np.minimum(center - lower, upper - center)
     cap = np.array([MAX_AMPLITUDE[kind_] for kind_ in robot.joint_kinds])
     amplitude = np.minimum(amplitude_fraction * margin, cap)
+    still = [name for name, a in zip(robot.joint_names, amplitude, strict=True) if not a > 0]
+    if still:
+        warnings.warn(
+            f"{robot.name}: the generic trajectory holds joints {still} still: their position "
+            f"range is empty (the URDF's lower and upper limits coincide, or home sits on a "
+            f"limit), so they are not exercised; fix the limits or give the scenario its own "
+            f"trajectory",
+            stacklevel=2,
+        )
     speed = velocity_fraction * _usable(robot.velocity_limit)
 
     if kind == "sinusoid":

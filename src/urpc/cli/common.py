@@ -264,6 +264,7 @@ def scenario_or_robot(args, example: str, see: str = "", box_help: str = "", **o
         shipped = default_uncertainty(args.robot)
         uncertainty = None if shipped is None else str(shipped)
     if args.scenario is not None:
+        _refuse_a_robot_name_as_scenario(args.scenario)
         return load_scenario(args.scenario).with_overrides(
             robot=args.robot, uncertainty=uncertainty, **overrides
         )
@@ -280,6 +281,30 @@ def scenario_or_robot(args, example: str, see: str = "", box_help: str = "", **o
         )
     scenario = parse_scenario({"robot": args.robot, "uncertainty": uncertainty})
     return scenario.with_overrides(name=robot_display_name(args.robot), **overrides)
+
+
+def _refuse_a_robot_name_as_scenario(text: str) -> None:
+    """``urpc certify TwoDofs``: a robot's name where a scenario goes is an error that says to give
+    it as ``--robot`` (``urpc check`` takes the robot positionally, these commands do not)."""
+    from pathlib import Path
+
+    from ..model.catalog import builtin_robots, example_robot_data_robots
+
+    if Path(text).exists() or "/" in text or text.endswith((".yaml", ".yml")):
+        return
+    if text in {*builtin_robots(), *example_robot_data_robots()}:
+        from ..studies.scenario import shipped_scenarios
+
+        own = [name for name in shipped_scenarios() if name.startswith(f"{text}/")]
+        if own:
+            instead = f", or one of its shipped scenarios: {', '.join(own)}"
+        else:
+            box = f"'urpc init {text} --out box.yaml' writes one"
+            instead = f" and --uncertainty BOX.yaml ({box}), or a scenario file"
+        raise InputError(
+            f"'{text}' is a robot, not a scenario: give it as --robot {text}{instead}",
+            field="scenario",
+        )
 
 
 def add_output_arguments(

@@ -331,7 +331,8 @@ def _print_summary(
     if m["max_error_after_entry"] is not None:
         print(f"after entry  max ||e|| = {m['max_error_after_entry']:.4g} {position}")
     print(
-        f"torque       peak {m['torque_peak']:.4g} {force}, RMS {m['torque_rms']:.4g} {force}, "
+        f"torque       peak {m['torque_peak']:.4g} {force} (largest |u_i|), "
+        f"RMS {m['torque_rms']:.4g} {force} (of ||u||), "
         f"variation {m['torque_variation']:.4g} {force}/s"
     )
     if result.saturated_samples:

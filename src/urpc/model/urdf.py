@@ -193,18 +193,30 @@ def mimic_joints(path: Path) -> dict[str, str]:
 
 def check_mimic_joints(path: Path, locked: Mapping[str, float]) -> None:
     """Refuse a mimic joint unless it and the joint it mimics are both locked: urpc would model
-    them as two independent degrees of freedom, which the real mechanism is not."""
-    for follower, leader in mimic_joints(path).items():
-        if follower in locked and leader in locked:
-            continue
-        raise InputError(
-            f"joint '{follower}' mimics joint '{leader}' (<mimic> in the URDF); urpc does not "
-            "model mimic joints and would simulate two independent joints: lock both "
-            f"(--lock {leader},{follower}, or locked_joints=['{leader}', '{follower}']) or "
-            "remove the <mimic> element",
-            source=path,
-            field=f"joint.{follower}.mimic",
-        )
+    them as two independent degrees of freedom, which the real mechanism is not. The error names
+    the first such pair and gives one ``--lock`` list that covers every pair (with the joints
+    already locked), so that a URDF with several grippers is fixed in one step."""
+    pairs = [
+        (follower, leader)
+        for follower, leader in mimic_joints(path).items()
+        if not (follower in locked and leader in locked)
+    ]
+    if not pairs:
+        return
+    follower, leader = pairs[0]
+    joints = list(dict.fromkeys([*locked, *(j for pair in pairs for j in pair[::-1])]))
+    more = len(pairs) - 1
+    others = (
+        f" ({more} more mimic pair{'s are' if more > 1 else ' is'} in that list)" if more else ""
+    )
+    raise InputError(
+        f"joint '{follower}' mimics joint '{leader}' (<mimic> in the URDF); urpc does not "
+        "model mimic joints and would simulate two independent joints: lock both "
+        f"(--lock {','.join(joints)}, or locked_joints={joints}){others} or "
+        "remove the <mimic> element",
+        source=path,
+        field=f"joint.{follower}.mimic",
+    )
 
 
 def robot_display_name(robot: str) -> str:

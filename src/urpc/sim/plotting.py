@@ -81,7 +81,7 @@ def plot_trajectory(result: Run, *, actual: bool = True) -> Figure:
         line = axes.plot(result.t, result.q_desired[:, i], label=f"$q_{{d,{i + 1}}}$")[0]
         if actual:
             axes.plot(
-                result.t, result.q[:, i], ls="--", color=line.get_color(), label=f"$q_{i + 1}$"
+                result.t, result.q[:, i], ls="--", color=line.get_color(), label=f"$q_{{{i + 1}}}$"
             )
     axes.set(xlabel="time [s]", ylabel="joint position [rad]")
     axes.set_title(f"Trajectory - {describe(result)}")
