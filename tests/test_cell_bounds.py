@@ -68,7 +68,61 @@ def test_the_coriolis_bounds_hold_pinocchio_in_the_lower_metric(arm):
     matrix and its mismatch along ``qd_a``, from Pinocchio's ``M`` by its Christoffel symbols. The
     UR5's box has more parameter directions than the triangle inequality is tried for."""
     robot = urpc.load_robot(arm)
-    box = urpc.load_uncertainty(arm, robot)
+    _check_coriolis_bounds(robot, urpc.load_uncertainty(arm, robot))
+
+
+def _crowded_arm(folder):
+    """Two joints; the second body carries three more links on fixed joints (a sensor, a camera,
+    a tool), every link with its mass, centre of mass and inertia uncertain: 40 directions in
+    that body, which the plant's parameter set replaces by its interval hull."""
+    inertial = (
+        '<inertial><origin xyz="{c}"/><mass value="{m}"/><inertia ixx="{i}" ixy="0" ixz="0" '
+        'iyy="{i}" iyz="0" izz="{i}"/></inertial>'
+    )
+    parts = ['<robot name="crowded"><link name="base"/>']
+    parts.append(
+        '<joint name="j0" type="revolute"><parent link="base"/><child link="l0"/>'
+        '<axis xyz="0 0 1"/><limit lower="-2" upper="2" effort="50" velocity="2"/></joint>'
+        f'<link name="l0">{inertial.format(c="0.2 0 0", m=2.0, i=0.02)}</link>'
+        '<joint name="j1" type="revolute"><parent link="l0"/><child link="l1"/>'
+        '<origin xyz="0.4 0 0"/><axis xyz="0 1 0"/>'
+        '<limit lower="-2" upper="2" effort="50" velocity="2"/></joint>'
+        f'<link name="l1">{inertial.format(c="0.15 0 0", m=1.5, i=0.01)}</link>'
+    )
+    for k, (name, c) in enumerate((("sensor", "0.05 0.02 0"), ("camera", "0 0 0.04"),
+                                   ("tool", "0.1 0 -0.03"))):  # fmt: skip
+        parts.append(
+            f'<joint name="f{k}" type="fixed"><parent link="l1"/><child link="{name}"/>'
+            f'<origin xyz="0.3 0 0"/></joint>'
+            f'<link name="{name}">{inertial.format(c=c, m=0.4, i=0.002)}</link>'
+        )
+    parts.append("</robot>")
+    path = folder / "crowded.urdf"
+    path.write_text("".join(parts))
+    robot = urpc.load_robot(path)
+    spec = {
+        "mass": "10%", "com_x": "+-0.01", "com_y": "+-0.01", "com_z": "+-0.01",
+        "ixx": "20%", "iyy": "20%", "izz": "20%",
+    }  # fmt: skip
+    box = urpc.parse_uncertainty(
+        {"links": {name: spec for name in ("l0", "l1", "sensor", "camera", "tool")}}, robot
+    )
+    return robot, box
+
+
+def test_the_coriolis_bounds_hold_pinocchio_with_a_body_hull(tmp_path):
+    """The same on an arm whose second body merges four uncertain links (the parameter set's
+    interval hull of that body, :data:`urpc.control.parameter_sets.HULL_DIRECTIONS`)."""
+    from urpc.control.parameter_sets import HULL_DIRECTIONS, plant_parameters
+
+    robot, box = _crowded_arm(tmp_path)
+    keys = plant_parameters(box.nominal_robot(robot), box).keys
+    assert any(key[0].startswith("body") for key in keys)  # the hull is in use
+    assert sum(not key[0].startswith("body") for key in keys) < HULL_DIRECTIONS
+    _check_coriolis_bounds(robot, box)
+
+
+def _check_coriolis_bounds(robot, box):
     T, tube, r_max = 1e-3, 5e-3, 0.2
     controller = urpc.synthesize(robot, box, 1e-2, sample_period=T)
     trajectory = generic_trajectory(box.nominal_robot(robot))

@@ -307,6 +307,21 @@ def test_an_uncertified_period_names_the_failed_condition_and_the_period_that_wo
     assert again.certified, again.summary()
 
 
+def test_an_impractical_period_says_what_in_the_box_makes_the_contraction_small(rr, rr_box):
+    """At 0.2 s no margin a - b is positive, and the period that certifies is below 0.1 ms: the
+    advice names beta (which bounds a), the lightest joint and the intervals to narrow."""
+    controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=0.2)
+    certificate = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
+    figures = certificate.figures
+    assert not certificate.certified and "dominant_term" not in figures
+    assert certificate.max_sample_period < 1e-4
+    assert figures["contraction"] <= figures["beta"]
+    assert f"beta = {figures['beta']:.3g}" in figures["advice"]
+    assert f"joint '{figures['lightest_joint']}'" in figures["advice"]
+    assert figures["lightest_joint"] in rr.joint_names
+    assert "narrow the mass and inertia intervals" in figures["advice"]
+
+
 def test_continuous_time_theorem_2_is_certified_for_any_epsilon(rr, rr_box):
     controller = urpc.synthesize(rr, rr_box, 1e-3)
     certificate = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)

@@ -124,6 +124,11 @@ TERMS = {
 }
 
 
+#: A certified period below this [s] (10 kHz) is of no use on an arm: the advice then says what
+#: in the box makes the contraction small.
+IMPRACTICAL_PERIOD = 1e-4
+
+
 def advice(
     figures: dict, floor: float, controller: IntervalPassivityController, max_period: float
 ) -> str:
@@ -155,10 +160,22 @@ def advice(
         )
     if term is None:
         margin = figures.get("margin", math.nan)
-        return (
-            text + f"; the period's perturbation b exceeds its contraction a (a - b = {margin:.3g}"
+        text += (
+            f"; the period's perturbation b exceeds its contraction a (a - b = {margin:.3g}"
             "): b grows with T Kr and T |qd|, so a shorter period or a lower Kr helps"
         )
+        joint = figures.get("lightest_joint")
+        if joint is not None and max_period < IMPRACTICAL_PERIOD:
+            text += (
+                f"; that period is faster than torque interfaces run: the contraction a = "
+                f"{figures.get('contraction', math.nan):.3g} is at most beta = "
+                f"{figures.get('beta', math.nan):.3g} (the box's inertia lower bound over its "
+                f"upper bound along the worst mode) and the lightest mode, joint '{joint}' at "
+                f"t = {figures['worst_time']:.3g} s (lambda_L = "
+                f"{figures.get('lambda_L', math.nan):.3g}), divides the perturbations: narrow "
+                f"the mass and inertia intervals of the links that joint moves, or lock it"
+            )
+        return text
     share = figures["term_shares"][term]
     text += (
         f"; the floor is {share:.0%} '{term}' ({TERMS[term]}), at t = "

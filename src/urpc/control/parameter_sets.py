@@ -18,6 +18,12 @@ values (the products of ``v(c)`` round); the weights ``w_i`` are exact.
 A direction is identified by its link and kind (``"mass"``, or the coordinate's index), so that
 the pieces of a box (:mod:`urpc.control.box_pieces`, cut along mass intervals) share their
 directions and differ in their weights only.
+
+In the whole plant's set, a body into which many uncertain links are merged (20 directions or
+more: Baxter's hands) keeps its 10 coordinate axes instead, weighted by the interval hull of its
+part of the zonotope: sound, at the price of that part's correlations, and what keeps the
+Coriolis forms' cost (one matrix per direction) at 10 per body at most (470 directions become
+150 on Baxter; the shipped arms, with 13 at most, are unchanged).
 """
 
 from __future__ import annotations
@@ -164,12 +170,18 @@ class PlantParameters:
         return out * (1 + ROUNDING)
 
 
+#: A body with at least this many directions (several uncertain links merged into it, as on
+#: Baxter, whose hands carry cameras, sensors and grippers) has them replaced by its 10
+#: coordinate axes (module docstring).
+HULL_DIRECTIONS = 20
+
+
 def plant_parameters(robot, box: ParameterBox) -> PlantParameters:
     """:class:`PlantParameters` of a box (or a piece of one)."""
     nominal = parameters_of(robot)
     size = len(nominal)
     centre, centre_rad = nominal.copy(), np.zeros(size)
-    rows, row_rads, weights, keys = [], [], [], []
+    rows, row_rads, weights, keys, bodies = [], [], [], [], []
     for link_box in box.uncertain_links:
         link = link_parameters(robot, link_box)
         A, absolute, columns = link.A, np.abs(link.A), link.columns
@@ -187,9 +199,44 @@ def plant_parameters(robot, box: ParameterBox) -> PlantParameters:
             row_rads.append(row_rad)
             weights.append(link.weights[k])
             keys.append(key)
+            bodies.append(columns.start)
+    rows, row_rads, weights, keys = _hull_crowded_bodies(rows, row_rads, weights, keys, bodies)
     directions = (
         Ball(np.array(rows), np.array(row_rads)) if rows else Ball.point(np.zeros((0, size)))
     )
     return PlantParameters(
         Ball(centre, centre_rad), directions, np.asarray(weights, dtype=float), tuple(keys)
     )
+
+
+def _hull_crowded_bodies(rows, row_rads, weights, keys, bodies):
+    """Each body with :data:`HULL_DIRECTIONS` directions or more keeps, instead of them, its 10
+    coordinate axes ``e_k`` (exact) with the weights ``sum_i w_i (|d_i,k| + rad d_i,k)``: the
+    interval hull of that part of the zonotope, which contains it (``|sum_i s_i w_i d_i,k| <=
+    sum_i w_i |d_i,k|`` for ``|s_i| <= 1`` and any ``d_i`` of its ball). The Coriolis forms cost
+    one matrix per direction; the hull loses the correlation between those directions only."""
+    starts, counts = np.unique(bodies, return_counts=True) if bodies else ((), ())
+    crowded = {int(b) for b, c in zip(starts, counts, strict=True) if c >= HULL_DIRECTIONS}
+    if not crowded:
+        return rows, row_rads, weights, keys
+    kept = [i for i, b in enumerate(bodies) if b not in crowded]
+    out = (
+        [rows[i] for i in kept],
+        [row_rads[i] for i in kept],
+        [weights[i] for i in kept],
+        [keys[i] for i in kept],
+    )
+    size = len(rows[0])
+    for start in sorted(crowded):
+        members = [i for i, b in enumerate(bodies) if b == start]
+        spread = sum(weights[i] * (np.abs(rows[i]) + row_rads[i]) for i in members)
+        spread = spread * (1 + ROUNDING * (len(members) + 1))
+        for k in range(start, start + 10):
+            if spread[k] > 0:
+                axis = np.zeros(size)
+                axis[k] = 1.0
+                out[0].append(axis)
+                out[1].append(np.zeros(size))
+                out[2].append(float(spread[k]))
+                out[3].append((f"body at column {start}", f"axis {k - start}"))
+    return out

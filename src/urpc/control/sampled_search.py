@@ -300,5 +300,10 @@ class SampledSearch:
             )
             if link is not None:
                 out["dominant_link"], out["dominant_link_share"] = link
+        elif "margin_cell" in parts:  # no floor: where the margin a - b is least
+            cell = parts["margin_cell"]
+            out["worst_time"] = float(quantities["cell_start"][cell])
+            lightest = lightest_joint(floor_of, quantities, cell)
+            out["lightest_joint"] = floor_of.robot.joint_names[lightest]
         out.update(self.controller.gain_law.saturation_figures())
         return out
