@@ -30,6 +30,21 @@ def test_from_samples_interpolates_c2():
     assert abs(trajectory.reference(1.05).qdd[0] - exact) < 1e-3
 
 
+def test_samples_that_end_moving_warn_and_rest_to_rest_ones_do_not(recwarn):
+    """From q alone the spline ends at rest: data that ends mid-motion is stopped within one
+    sample interval (accelerations the data does not have), which the warning says."""
+    t, q = rest_samples(201, 2.0)
+    urpc.from_samples(t, q)
+    assert not [w for w in recwarn if "moving" in str(w.message)]
+    moving = np.stack([np.sin(np.pi * t / 2.2) ** 2, 0 * t], 1)  # ends at 0.77 rad/s
+    with pytest.warns(UserWarning, match=r"the samples end moving \(joint 1 at 0\.7"):
+        trajectory = urpc.from_samples(t, moving)
+    # What the warning is about: the spline's last interval decelerates far harder than the data.
+    data_acceleration = np.abs(np.diff(moving[:, 0], 2)).max() / (t[1] - t[0]) ** 2
+    ending = trajectory.evaluate(np.linspace(t[-6], t[-1], 501))[2][:, 0]
+    assert np.abs(ending).max() > 10 * data_acceleration
+
+
 def test_given_velocities_are_honoured():
     t = np.linspace(0, 1, 11)
     q, qd = np.sin(t)[:, None], np.cos(t)[:, None]

@@ -10,6 +10,7 @@ through every given value (``qdd`` by differences of ``qd`` when absent).
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -65,6 +66,7 @@ class FileTrajectory(Trajectory):
             )
         self.dof = self.q.shape[1]
         if qd is None:
+            self._warn_if_not_at_rest()
             k = 5 if len(self.t) >= 6 else (3 if len(self.t) >= 4 else 1)
             if k == 5:
                 rest = [(1, np.zeros(self.dof)), (2, np.zeros(self.dof))]
@@ -87,6 +89,29 @@ class FileTrajectory(Trajectory):
         self._spline = spline
         self._velocity = spline.derivative(1)
         self._acceleration = spline.derivative(2)
+
+    def _warn_if_not_at_rest(self) -> None:
+        """From ``q`` alone the spline starts and ends at rest: samples that start or end moving
+        (the speed of the first or last two samples above 5 % of the samples' largest) force it
+        to stop within one sample interval, with accelerations the data does not have. Warn,
+        naming the end, the joint and the speed."""
+        speeds = np.abs(np.diff(self.q, axis=0) / np.diff(self.t)[:, None])  # (K - 1, dof)
+        if len(speeds) < 2 or not np.any(speeds > 0):
+            return
+        peak = speeds.max()
+        for end, row in (("start", 0), ("end", -1)):
+            joint = int(np.argmax(speeds[row]))
+            if speeds[row, joint] > 0.05 * peak:
+                where = f"{self.source}: " if self.source else ""
+                warnings.warn(
+                    f"{where}the samples {end} moving (joint "
+                    f"{joint + 1} at {speeds[row, joint]:.3g} rad/s between the {end}'s two "
+                    f"samples, {speeds[row, joint] / peak:.0%} of the largest speed), but a "
+                    f"trajectory from q alone {end}s at rest: the spline stops within one sample "
+                    f"interval, with accelerations the data does not have; extend the samples to "
+                    f"rest, or give qd",
+                    stacklevel=3,
+                )
 
     def describe(self, row: int) -> str:
         line = (
