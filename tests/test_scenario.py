@@ -98,7 +98,7 @@ BAD = [
     ({"duration": 0}, "duration", "must be > 0"),
     ({"sample_period": 0.0}, "sample_period", "must be > 0"),
     ({"sample_period": "discrete"}, "sample_period", "continuous"),
-    ({"sample_period": 20.0, "duration": 10.0}, "sample_period", "longer than the duration"),
+    ({"sample_period": 20.0, "duration": 10.0}, "duration", "shorter than one sample period"),
     ({"sample_period": "continuous", "disturbance": 5}, "disturbance", "per control sample"),
     ({"disturbance": -1}, "disturbance", ">= 0"),
     ({"controller": "pid"}, "controller", "valid: computed-torque, interval, r-alpha"),
@@ -301,9 +301,11 @@ def test_overrides():
     # shorter than the default period, and the copy keeps the file it came from.
     short = load_scenario("rr_planar/s1_ic1").with_overrides(duration=5e-4)
     assert short.duration == 5e-4 and short.continuous and short.source.name == "s1_ic1.yaml"
-    with pytest.raises(InputError, match="longer than the duration") as info:
+    with pytest.raises(
+        InputError, match=r"shorter than one sample period \(sample_period = "
+    ) as info:
         scenario.with_overrides(duration=5e-5)  # the file's period is 1e-4 s
-    assert info.value.field == "sample_period" and info.value.source == "command-line override"
+    assert info.value.field == "duration" and info.value.source == "command-line override"
 
 
 def test_to_dict_round_trip(tmp_path):

@@ -217,29 +217,33 @@ def feedback_law(
 def _sampled_conditions(
     figures: dict[str, float], floor: float, epsilon: float, max_period: float
 ) -> list[Condition]:
-    return [
-        Condition(
-            "inertia lower bound M_L positive definite", figures["lambda_L"] > 0,
-            figures["lambda_L"], 0.0,
-            "the box allows a joint with no inertia: narrow the mass/inertia intervals",
-        ),
-        Condition(
-            "relative inertia bound beta > 0", figures["beta"] > 0, figures["beta"], 0.0,
-            "the box's inertia bounds are vacuous: narrow the mass/inertia intervals",
-        ),
-        Condition(
-            "contraction a exceeds the perturbation b (at r = 0)", figures["margin"] > 0,
-            figures["margin"], 0.0,
-            "shorten the sample period or lower Kr (b grows with T Kr and T |qd|)",
-        ),
-        Condition(
-            "ultimate bound below epsilon", floor <= epsilon, floor, epsilon,
-            (f"raise epsilon to {floor:.3g} rad or shorten" if math.isfinite(floor)
-             else "no epsilon is guaranteed at this period: shorten")
-            + (f" the period to {max_period:.3g} s" if max_period > 0
-               else " the period: none up to twice this one is certified"),
-        ),
+    """The sampled law's conditions; each explanation says what to change when the condition
+    fails, and what holds when it holds."""
+    margin = figures["margin"]
+    fix_floor = (
+        (f"raise epsilon to {floor:.3g} rad or shorten" if math.isfinite(floor)
+         else "no epsilon is guaranteed at this period: shorten")
+        + (f" the period to {max_period:.3g} s" if max_period > 0
+           else " the period: none up to twice this one is certified")
+    )  # fmt: skip
+    specs = [
+        ("inertia lower bound M_L positive definite", figures["lambda_L"] > 0,
+         figures["lambda_L"], 0.0,
+         "the box allows a joint with no inertia: narrow the mass/inertia intervals",
+         "every plant of the box has an inertia of at least lambda_L along every mode"),
+        ("relative inertia bound beta > 0", figures["beta"] > 0, figures["beta"], 0.0,
+         "the box's inertia bounds are vacuous: narrow the mass/inertia intervals",
+         "the law's inertia model is at least beta times every plant's"),
+        ("contraction a exceeds the perturbation b (at r = 0)", margin > 0, margin, 0.0,
+         "shorten the sample period or lower Kr (b grows with T Kr and T |qd|)",
+         f"a period contracts the error by a - b = {margin:.3g} at least, in the plant's metric"),
+        ("ultimate bound below epsilon", floor <= epsilon, floor, epsilon, fix_floor,
+         f"the error ends below the floor {floor:.3g} rad <= epsilon"),
     ]  # fmt: skip
+    return [
+        Condition(name, holds, value, limit, held if holds else fix)
+        for name, holds, value, limit, fix, held in specs
+    ]
 
 
 #: Floor of the eigenvalues of :func:`positive_part`, relative to the largest one.

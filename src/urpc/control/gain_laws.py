@@ -103,7 +103,10 @@ class ConstantGains(GainLaw):
             ("Theorem 1: kappa_P >= 1", self.kappa_P, 1.0, "choose kappa_P >= 1"),
             ("Theorem 1: phi_P >= 1", self.phi_P, 1.0, "choose phi_P >= 1"),
         ]
-        return [Condition(n, v >= lim, v, lim, x) for n, v, lim, x in specs]
+        return [
+            Condition(n, v >= lim, v, lim, f"{v:.3g} >= {lim:g}" if v >= lim else x)
+            for n, v, lim, x in specs
+        ]
 
     def continuous_time_bound(self, lambda_L, lambda_U, Kr, epsilon):
         """``||r|| <= sqrt(lambda_U / lambda_L) / kappa_P``, ``||e|| <= ||r|| / min(Kr)``."""
@@ -171,7 +174,10 @@ class AdaptiveGains(GainLaw):
             ("Theorem 2: kappa_I > 0", self.kappa_I, 0.0, "choose kappa_I > 0"),
             ("Theorem 2: phi_I > 0", self.phi_I, 0.0, "choose phi_I > 0"),
         ]
-        return [Condition(n, v > lim, v, lim, x) for n, v, lim, x in specs]
+        return [
+            Condition(n, v > lim, v, lim, f"{v:.3g} > {lim:g}" if v > lim else x)
+            for n, v, lim, x in specs
+        ]
 
     def continuous_time_bound(self, lambda_L, lambda_U, Kr, epsilon):
         """Theorem 2: ``||e||`` ends up below any ``epsilon`` (floor 0), no further condition."""

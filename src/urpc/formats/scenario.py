@@ -302,8 +302,9 @@ class Scenario(FileFormat):
         period = self.sample_period
         if period is not None and period > self.duration:
             raise FieldError(
-                "sample_period",
-                f"the sample period {period:g} s is longer than the duration {self.duration:g} s",
+                "duration",
+                f"the duration {self.duration:g} s is shorter than one sample period "
+                f"(sample_period = {period:g} s): lengthen the duration or shorten the period",
             )
         if period is None and self.plant != "pinocchio":
             raise FieldError(
