@@ -40,6 +40,24 @@ def test_robots_json_lists_shipped_and_not_supported(capsys):
     assert not set(listing["not_supported"]) & set(listing["example_robot_data"])
 
 
+def test_robots_gives_the_lock_list_that_loads_each_robot_with_mimic_joints(capsys):
+    """Every suggested --lock list loads the robot (and the robot is refused without it)."""
+    import pytest
+
+    import urpc
+    from urpc.errors import InputError
+
+    code, out, _ = _run(capsys, "robots", "--json")
+    needs_lock = json.loads(out)["needs_lock"]
+    assert {"panda", "baxter"} <= set(needs_lock)
+    for name in ("panda", "baxter"):
+        with pytest.raises(InputError, match="mimics joint"):
+            urpc.load_robot(name)
+        assert urpc.load_robot(name, locked_joints=needs_lock[name]).dof > 0
+    code, text, _ = _run(capsys, "robots")
+    assert f"--lock {','.join(needs_lock['baxter'])}" in text
+
+
 def test_check_lists_the_moving_links(capsys):
     code, out, _ = _run(capsys, "check", "rr_planar")
     assert code == 0 and "moving links link1, link2, tool" in out

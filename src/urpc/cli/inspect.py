@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from ..errors import InputError
 from .common import (
     BOUND_METHODS,
@@ -72,6 +74,7 @@ def run_robots(args) -> int:
             shipped[name] = (known[name], data)
     supported = {n: e for n, e in erd.items() if not e.floating_base}
     floating = {n: e for n, e in erd.items() if e.floating_base}
+    needs_lock = _mimic_joints_by_robot({**builtin, **supported})
     if args.json:
         print_json(
             {
@@ -90,6 +93,7 @@ def run_robots(args) -> int:
                 "not_supported": {
                     n: {"urdf": str(e.urdf), "reason": "floating base"} for n, e in floating.items()
                 },
+                "needs_lock": needs_lock,
             }
         )
         return EXIT_OK
@@ -110,12 +114,38 @@ def run_robots(args) -> int:
         "is refused):"
     )
     _print_columns([n for n in supported if n not in shipped])
+    if needs_lock:
+        print(
+            "  Mimic joints (urpc does not model them) to lock with --lock, or locked_joints=[...]"
+            " in the API:"
+        )
+        for name, joints in needs_lock.items():
+            print(f"    {name:<24} --lock {','.join(joints)}")
     print(
         "\nNot supported: floating-base robots of example-robot-data (legged, humanoid, aerial, "
         "mobile;\nurpc controls fixed-base arms):"
     )
     _print_columns(list(floating))
     return EXIT_OK
+
+
+def _mimic_joints_by_robot(entries) -> dict[str, list[str]]:
+    """For each robot whose URDF has mimic joints, every joint of those pairs (leaders first):
+    the ``--lock`` list it needs."""
+    from xml.etree.ElementTree import ParseError
+
+    from ..model.urdf import mimic_joints
+
+    out = {}
+    for name, entry in entries.items():
+        try:
+            pairs = mimic_joints(Path(entry.urdf))
+        except (OSError, ParseError):  # reported when the robot is loaded
+            continue
+        if pairs:
+            joints = [j for follower, leader in pairs.items() for j in (leader, follower)]
+            out[name] = list(dict.fromkeys(joints))
+    return out
 
 
 def _print_columns(names: list[str]) -> None:
