@@ -184,3 +184,26 @@ def test_an_unusable_cache_gives_one_warning_and_the_run_goes_on(
     line = _line(out, "certificate  ")
     assert line.startswith("certificate  computed in ") and "not cached: the cache cannot" in line
     assert len(counted) == 1
+
+
+def test_off_a_terminal_a_large_arm_says_the_certificate_is_being_computed(capsys):
+    """Minutes of silence read as a hang: a 10-joint arm or larger gets one line when the
+    certificate starts (not when the cache answers) and its closing line; a small arm none."""
+    import argparse
+
+    from urpc.cli.common import LARGE_ARM_DOF, certificate_progress
+
+    args = argparse.Namespace(no_progress=False)  # pytest's stderr is not a terminal
+    assert certificate_progress(args, LARGE_ARM_DOF - 1) is False
+    cached = certificate_progress(args, 15)
+    cached("certificate: cached (key 0123456789ab)")
+    assert capsys.readouterr().err == ""
+    computed = certificate_progress(args, 15)
+    computed("enclosing 160 cells (||e|| <= 0.01, ||r|| <= 0.45)")
+    computed("searching the largest sample period")
+    computed("certificate: computed in 259 s, cached (key 0123456789ab)")
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 2
+    assert lines[0].startswith("certificate: computing it for a 15-joint arm first")
+    assert "--no-certify skips it" in lines[0]
+    assert lines[1] == "certificate: computed in 259 s, cached (key 0123456789ab)"

@@ -9,8 +9,8 @@ from .common import (
     add_command,
     add_json_argument,
     add_progress_argument,
+    certificate_progress,
     print_json,
-    show_progress,
 )
 
 
@@ -61,7 +61,7 @@ def run_certify(args) -> int:
             setup,
             controller or build_controller(setup, "interval"),
             refresh=args.no_cache,
-            progress=show_progress(args),
+            progress=certificate_progress(args, setup.robot.dof),
             announce=False,  # the last line of the output says it
         )
 

@@ -22,7 +22,7 @@ import math
 import re
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..errors import InputError
 from ..names import BOUND_METHODS, CONTROLLERS  # noqa: F401  (re-exported for the commands)
@@ -351,6 +351,37 @@ def show_progress(args) -> bool:
         return sys.stderr.isatty()
     except (AttributeError, ValueError):  # a replaced or closed stream
         return False
+
+
+#: From this many joints a certificate costs minutes of CPU (Baxter's 15: 259 s at 1 kHz).
+LARGE_ARM_DOF = 10
+
+
+def certificate_progress(args, dof: int) -> Any:
+    """The ``progress`` of a certificate: :func:`show_progress` on a terminal; off a terminal
+    (logs, pipes, CI), for an arm of :data:`LARGE_ARM_DOF` joints or more, one line when the
+    certificate starts to be computed (not when the cache answers) and its closing line, so that
+    minutes of silence do not read as a hang."""
+    if show_progress(args):
+        return True
+    if dof < LARGE_ARM_DOF:
+        return False
+    said: list[str] = []
+
+    def notice(line: str) -> None:
+        if line.startswith("certificate:"):  # the closing line
+            if said:
+                print(line, file=sys.stderr)
+        elif not said:
+            said.append(line)
+            print(
+                f"certificate: computing it for a {dof}-joint arm first (it can take minutes; later "
+                "runs of this configuration read it from the cache; --no-certify skips it)",
+                file=sys.stderr,
+                flush=True,
+            )
+
+    return notice
 
 
 def output_folder(out: Path | None, default: Path) -> Path:

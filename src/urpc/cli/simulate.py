@@ -19,6 +19,7 @@ from .common import (
     add_output_arguments,
     add_scenario_argument,
     add_uncertainty_option,
+    certificate_progress,
     count,
     joint_units,
     json_text,
@@ -189,7 +190,7 @@ def run_simulate(args) -> int:
         controller,
         certify=not args.no_certify,
         refresh=args.no_cache,
-        progress=show_progress(args),
+        progress=certificate_progress(args, setup.robot.dof),
     )
     guarantee = outcome.fields
     warn_uncertified(guarantee)
