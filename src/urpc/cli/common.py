@@ -286,8 +286,6 @@ def scenario_or_robot(args, example: str, see: str = "", box_help: str = "", **o
 def _refuse_a_robot_name_as_scenario(text: str) -> None:
     """``urpc certify TwoDofs``: a robot's name where a scenario goes is an error that says to give
     it as ``--robot`` (``urpc check`` takes the robot positionally, these commands do not)."""
-    from pathlib import Path
-
     from ..model.catalog import builtin_robots, example_robot_data_robots
 
     if Path(text).exists() or "/" in text or text.endswith((".yaml", ".yml")):
@@ -353,7 +351,7 @@ def show_progress(args) -> bool:
         return False
 
 
-#: From this many joints a certificate costs minutes of CPU (Baxter's 15: 259 s at 1 kHz).
+#: From this many joints a certificate can cost minutes of CPU (Baxter's 15: 259 s at 1 kHz).
 LARGE_ARM_DOF = 10
 
 
