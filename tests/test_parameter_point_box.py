@@ -4,9 +4,11 @@ outside the box is warned and recorded as outside; a point with values the box h
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import warnings
 
+import numpy as np
 import pytest
 from conftest import RR_DIR
 
@@ -84,3 +86,16 @@ def test_the_shipped_points_are_inside_their_boxes():
         with warnings.catch_warnings():
             warnings.simplefilter("error", OutsideBoxWarning)
             assert build(load_scenario(name)).inside_box, name
+
+
+def test_random_vertices_are_distinct_and_exhaust_the_box():
+    """Every vertex once, in a seeded order, and on a box of more coordinates than an int64
+    holds the indices still reach the last coordinates."""
+    robot = urpc.load_robot("ur5")
+    box = urpc.load_uncertainty("ur5", robot)
+    drawn = list(box.random_vertices(np.random.default_rng(0)))
+    assert sorted(drawn) == list(range(2**box.n_uncertain))
+    assert drawn == list(box.random_vertices(np.random.default_rng(0)))
+    wide = dataclasses.replace(box, links=box.links * 8)  # 80 coordinates
+    first = [next(iter(wide.random_vertices(np.random.default_rng(k)))) for k in range(20)]
+    assert max(first) >= 2**70 and len(set(first)) == 20

@@ -74,13 +74,16 @@ def reference_torque(controller, trajectory, span: float) -> Condition | None:
     effort, limited = effort_limits(robot)
     if not np.any(limited):
         return None
-    count = 2**box.n_uncertain if box.n_uncertain < 30 else math.inf
+    count = 2**box.n_uncertain
     if count <= REFERENCE_PLANTS:
-        vertices = list(range(int(count)))
-    else:  # the all-lower and all-upper corners, then seeded ones
-        rng = np.random.default_rng(0)
-        high = int(min(count, 2**62))
-        vertices = [0, high - 1] + [int(x) for x in rng.integers(0, high, REFERENCE_PLANTS - 2)]
+        vertices = list(range(count))
+    else:  # the all-lower and all-upper corners, then distinct seeded ones
+        vertices = [0, count - 1]
+        for index in box.random_vertices(np.random.default_rng(0)):
+            if len(vertices) == REFERENCE_PLANTS:
+                break
+            if index not in (0, count - 1):
+                vertices.append(index)
     plants = [("the nominal plant", box.plant(robot, None))] + [
         (f"vertex {k} of the box", box.plant(robot, box.vertex(k))) for k in vertices
     ]

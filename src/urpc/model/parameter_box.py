@@ -274,6 +274,17 @@ class ParameterBox:
             joint_point = values
         return ParameterPoint(point, joint_point)
 
+    def random_vertices(self, rng: np.random.Generator):
+        """Distinct random vertex indices of :meth:`vertex`, one random bit per uncertain
+        coordinate (Python integers: any number of coordinates), until every vertex is drawn."""
+        n, seen = self.n_uncertain, set()
+        while len(seen) < 2**n:
+            bits = rng.integers(0, 2, size=n)
+            index = sum(int(b) << k for k, b in enumerate(bits))
+            if index not in seen:
+                seen.add(index)
+                yield index
+
     @property
     def n_uncertain(self) -> int:
         """Number of uncertain coordinates, link and joint parameters (the box has

@@ -110,7 +110,7 @@ def draw_runs(
     if vertex_runs == total:
         candidates = iter(range(total))
     else:
-        candidates = _random_vertices(box.n_uncertain, np.random.default_rng(selection_sequence))
+        candidates = box.random_vertices(np.random.default_rng(selection_sequence))
     epsilon = setup.scenario.epsilon
     specs: list[RunSpec] = []
     rejected_vertices = 0
@@ -148,17 +148,6 @@ def draw_runs(
         "rejected_vertices": rejected_vertices,
     }
     return tuple(specs), stats
-
-
-def _random_vertices(n_uncertain: int, rng: np.random.Generator):
-    """Distinct random vertex indices (bits drawn one per uncertain coordinate)."""
-    seen: set[int] = set()
-    while len(seen) < 2**n_uncertain:
-        bits = rng.integers(0, 2, size=n_uncertain)
-        index = sum(int(b) << k for k, b in enumerate(bits))
-        if index not in seen:
-            seen.add(index)
-            yield index
 
 
 def _consistent_draw(
