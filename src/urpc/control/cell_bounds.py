@@ -10,6 +10,7 @@ import dataclasses
 
 import numpy as np
 
+from ..model.ball_arithmetic import concatenate, stack
 from ..model.regressor_balls import Ball, BallRegressor, Jet
 from ..model.verified_norms import spectral_norm
 from .cell_inertia import LAPACK_MARGIN, InertiaModel, safe_cholesky
@@ -173,7 +174,7 @@ class CenteredCoriolis:
             else ((row(p.centre), 1.0),)
             for _, p in forms
         ]
-        centres = Ball(np.stack([x.mid for x in rows]), np.stack([x.rad for x in rows]))
+        centres = stack(rows, 0)
         cells, n = q.mid.shape
         # Derivatives along each coordinate l over the box: a jet per direction (the directions
         # share the value, which the recursion computes once).
@@ -200,13 +201,10 @@ class CenteredCoriolis:
             by_velocity.setdefault(key, ([], v_center))[0].append(index)
         centre_terms: dict[int, tuple[OverCell, OverCell | None]] = {}
         count = len(rows)
+        chosen = concatenate([centres, directions], 0)  # every centre's row, then the directions
         for indices, v_center in by_velocity.values():
-            chosen = Ball(
-                np.concatenate([centres.mid, directions.mid]),
-                np.concatenate([centres.rad, directions.rad]),
-            )
             values = over_cell(
-                lambda x, v, chosen=chosen: regressor.coriolis_matrices(x, v, chosen),
+                lambda x, v: regressor.coriolis_matrices(x, v, chosen),
                 Ball.point(v_center),
             )
             along = values.select((slice(count, None),)) if keys else None

@@ -17,6 +17,7 @@ import dataclasses
 
 import numpy as np
 
+from ..model.ball_arithmetic import concatenate
 from ..model.regressor_balls import Ball, BallRegressor, Jet
 from ..model.verified_norms import spectral_norm
 from .cell_partition import inward, outward
@@ -151,7 +152,7 @@ def curvatures_over(regressor: BallRegressor, boxes: Ball, parameters: np.ndarra
         regressor.mass_matrix_curvatures(boxes[start : start + chunk], parameters)
         for start in range(0, len(boxes.mid), chunk)
     ]
-    return Ball(np.concatenate([p.mid for p in parts]), np.concatenate([p.rad for p in parts]))
+    return concatenate(parts, 0)
 
 
 def group_curvatures(
@@ -195,10 +196,7 @@ def curvatures_for(
     extra = curvatures_over(regressor, own, parameters)
     group = group.copy()
     group[outside] = len(boxes.mid) + np.arange(len(outside))
-    both = Ball(
-        np.concatenate([curvatures.mid, extra.mid]), np.concatenate([curvatures.rad, extra.rad])
-    )
-    return both, group
+    return concatenate([curvatures, extra], 0), group
 
 
 def inertia_models(

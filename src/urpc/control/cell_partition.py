@@ -39,6 +39,11 @@ class CellBatch:
     def __getitem__(self, index) -> CellBatch:
         return CellBatch(self.start[index], self.end[index], self.depth[index], self.group[index])
 
+    @staticmethod
+    def concatenate(parts: list[CellBatch]) -> CellBatch:
+        """The cells of ``parts``, in order."""
+        return CellBatch(*(np.concatenate([getattr(p, name) for p in parts]) for name in _FIELDS))
+
 
 _FIELDS = ("start", "end", "depth", "group")
 
@@ -75,8 +80,7 @@ class Partition:
 
     def cells(self) -> CellBatch:
         """Every cell of the partition, in the order of the cell axis (batch by batch)."""
-        parts = [b[m] for b, m in zip(self.batches, self.active, strict=True)]
-        return CellBatch(*(np.concatenate([getattr(p, name) for p in parts]) for name in _FIELDS))
+        return CellBatch.concatenate([b[m] for b, m in zip(self.batches, self.active, strict=True)])
 
     def split(self, cells) -> int:
         """Split the given cells (indices along the cell axis) in two halves each, except those
@@ -91,7 +95,7 @@ class Partition:
             take = take[batch.depth[take] < MAX_DEPTH]
             active[take] = False
             parts.append(batch[take])
-        split = CellBatch(*(np.concatenate([getattr(p, name) for p in parts]) for name in _FIELDS))
+        split = CellBatch.concatenate(parts)
         if not len(split):
             return 0
         middle = 0.5 * (split.start + split.end)

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..bounds.base import link_body_placement
 from ..bounds.hull import barycentric_enclosure
-from ..model.ball_arithmetic import U
+from ..model.ball_arithmetic import U, stack
 from ..model.regressor_balls import Ball, matvec, parameters_of
 from ..model.uncertainty import LinkBox, ParameterBox
 
@@ -117,11 +117,7 @@ def link_parameters(robot, box: LinkBox) -> LinkParameters:
             directions.append(Ball.point(np.eye(10)[k]))
             weights.append(float(rad[k]))
             keys.append((box.link, str(k)))
-    stacked = (
-        Ball(np.stack([d.mid for d in directions]), np.stack([d.rad for d in directions]))
-        if directions
-        else Ball.point(np.zeros((0, 10)))
-    )
+    stacked = stack(directions, 0) if directions else Ball.point(np.zeros((0, 10)))
     return LinkParameters(
         slice(10 * body, 10 * body + 10), A, Ball(centre, centre_rad), stacked,
         np.asarray(weights, dtype=float), tuple(keys),

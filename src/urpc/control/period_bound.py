@@ -99,6 +99,24 @@ class PeriodBound:
                     chosen |= cells
         return np.flatnonzero(chosen)
 
+    def cell_floors(self, T: float, d: float, quantities: dict, tube: float) -> np.ndarray:
+        """Per cell, the floor that cell alone would give at ``rho = 0`` on its worst piece (its
+        quasi-static error and response plus its pushed deviation over its own margin and its
+        forcing, back from the plant's metric; ``inf`` where the margin or a model fails): what
+        ranks the cells that decide the floor."""
+        d = d + self.joints.coulomb
+        D = self.gain(T)
+        score = np.zeros(len(quantities["cell_start"]))
+        for p in quantities["pieces"]:
+            terms = self.cell_terms(T, d, D, quantities, p, tube)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                per_cell = terms["slow"] + (
+                    terms["pushed"] / terms["margin"] + terms["forcing"]
+                ) / np.sqrt(np.maximum(terms["lam_L"], 1e-300))
+            per_cell = np.where((terms["margin"] > 0) & p["valid"], per_cell, np.inf)
+            score = np.maximum(score, per_cell)
+        return score
+
     def failing_cells(self, T: float, d: float, quantities: dict) -> int:
         """How many cells fail (an inertia model, or a contraction margin ``a - b`` that is not
         positive at ``rho = 0``) on any piece."""

@@ -216,17 +216,8 @@ class SampledSearch:
         decide this tube's floor only (a tenth of them, at least 8): the floor over some cells
         is at most the floor over all, so a floor at ``rho = 0`` beyond the tube (or none) over
         them holds for the whole reference."""
-        d, T = self.d + self.floor_of.joints.coulomb, self.T
-        D = self.bound.gain(T)
-        score = np.zeros(len(quantities["cell_start"]))
-        for p in quantities["pieces"]:
-            terms = self.bound.cell_terms(T, d, D, quantities, p, quantities["tube"])
-            with np.errstate(divide="ignore", invalid="ignore"):
-                per_cell = terms["slow"] + (
-                    terms["pushed"] / terms["margin"] + terms["forcing"]
-                ) / np.sqrt(np.maximum(terms["lam_L"], 1e-300))
-            per_cell = np.where((terms["margin"] > 0) & p["valid"], per_cell, np.inf)
-            score = np.maximum(score, per_cell)
+        T = self.T
+        score = self.bound.cell_floors(T, self.d, quantities, quantities["tube"])
         count = min(len(score), max(8, len(score) // 10))
         cells = np.argsort(score)[::-1][:count]
         self.say(f"enclosing {count} cells (||e|| <= {tube:.3g}) for the report")

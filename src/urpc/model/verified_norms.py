@@ -69,13 +69,10 @@ def _positive_definite(A, scratch):  # pragma: no cover - compiled
 
 
 @numba.njit(**_JIT)
-def _proved(G, s, A, scratch, shift):  # pragma: no cover - compiled
+def _proved(G, trace, s, A, scratch, shift):  # pragma: no cover - compiled
     """Whether ``lambda_max(G) < s`` is proved: the Cholesky factorization of ``(s - c) 1 - G``
     runs to completion (module docstring, step 3)."""
     n = G.shape[0]
-    trace = 0.0
-    for a in range(n):
-        trace += G[a, a]
     c = shift * n * (s + trace)
     for a in range(n):
         for b in range(n):
@@ -117,15 +114,12 @@ def _orthonormal(u, v, n):  # pragma: no cover - compiled
 
 
 @numba.njit(**_JIT)
-def _subspace_estimate(G, u, v, y, z, steps):  # pragma: no cover - compiled
+def _subspace_estimate(G, trace, u, v, y, z, steps):  # pragma: no cover - compiled
     """The largest Ritz value of ``G`` on a two-dimensional subspace after subspace iterations
     (step 1): a lower estimate of ``lambda_max`` that converges as ``(lambda_3 /
     lambda_1)^(2k)``, so that a close second eigenvalue (``X``'s eigenvalues of opposite signs
     and near magnitudes) does not slow it down."""
     n = G.shape[0]
-    trace = 0.0
-    for a in range(n):
-        trace += G[a, a]
     # The diagonal's square roots plus a constant: positive, so never orthogonal to the Perron
     # vector of a non-negative matrix; the second start alternates in sign.
     for a in range(n):
@@ -220,14 +214,14 @@ def _bound_one(G, x, y, u, v, A, W, steps, ladder, shift):  # pragma: no cover -
     mu = G[0, 0]  # exact for n = 1
     for estimate in range(2):
         if n > 1 and estimate == 0:
-            mu = _subspace_estimate(G, x, y, u, v, steps)
+            mu = _subspace_estimate(G, trace, x, y, u, v, steps)
         elif n > 1:
             mu = _jacobi_estimate(G, W)
         for rung in range(ladder.shape[0]):
             s = mu * (1.0 + ladder[rung])
             if s == 0.0:
                 s = trace * ladder[rung]
-            if _proved(G, s, A, W, shift):
+            if _proved(G, trace, s, A, W, shift):
                 return s
             if estimate == 0:
                 break  # the subspace estimate gets one attempt, then Jacobi's the ladder
@@ -270,18 +264,6 @@ def _gram_bounds(X, steps, ladder, shift):  # pragma: no cover - compiled
                 G[b, a] = s
         out[i] = _bound_one(G, x, y, u, v, A, W, steps, ladder, shift)
     return out
-
-
-def largest_eigenvalue_bounds(G: np.ndarray) -> np.ndarray:
-    """Proved upper bounds of ``lambda_max`` of a batch of symmetric positive semi-definite
-    matrices ``G`` (..., n, n); NaN where the proof failed (see the module docstring)."""
-    shape = G.shape[:-2]
-    n = G.shape[-1]
-    if n > LARGEST_DIMENSION:
-        return np.full(shape, np.nan)
-    flat = np.ascontiguousarray(G, dtype=np.float64).reshape(-1, n, n)
-    ladder = np.asarray(SLACK_LADDER, dtype=np.float64)
-    return _largest_eigenvalue_bounds(flat, SUBSPACE_STEPS, ladder, ROUNDING_SHIFT).reshape(shape)
 
 
 def spectral_norm(X: np.ndarray) -> np.ndarray:
