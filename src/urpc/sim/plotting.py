@@ -72,6 +72,25 @@ def describe(result: Run) -> str:
     return ", ".join(parts)
 
 
+#: Past this many legend entries (8 joints with their references) the legend goes beside the
+#: axes, where it hides no curve.
+INSIDE_LEGEND = 16
+
+
+def _joint_legend(axes, handles=None, labels=None, ncol: int = 1) -> None:
+    """The legend of per-joint curves: inside the axes (``ncol`` columns) for a few, beside them
+    for more than :data:`INSIDE_LEGEND` entries (20 per column)."""
+    if handles is None:
+        handles, labels = axes.get_legend_handles_labels()
+    if len(handles) <= INSIDE_LEGEND:
+        axes.legend(handles, labels, ncol=ncol, fontsize="small")
+        return
+    axes.legend(
+        handles, labels, ncol=-(-len(handles) // 20), fontsize="x-small",
+        loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+    )  # fmt: skip
+
+
 def plot_trajectory(result: Run, *, actual: bool = True) -> Figure:
     """Desired joint positions ``q_d(t)`` [rad] (the paper's Fig. 1), and the actual ``q(t)``
     dashed when ``actual``."""
@@ -86,7 +105,7 @@ def plot_trajectory(result: Run, *, actual: bool = True) -> Figure:
     axes.set(xlabel="time [s]", ylabel="joint position [rad]")
     axes.set_title(f"Trajectory - {describe(result)}")
     axes.grid(True, alpha=0.3)
-    axes.legend(ncol=2, fontsize="small")
+    _joint_legend(axes, ncol=2)
     return figure
 
 
@@ -104,7 +123,7 @@ def plot_reference(
     axes.set(xlabel="time [s]", ylabel="desired joint position [rad]")
     axes.set_title(title or "Desired trajectory")
     axes.grid(True, alpha=0.3)
-    axes.legend(fontsize="small")
+    _joint_legend(axes)
     return figure
 
 
@@ -259,7 +278,7 @@ def compare(
         ax = axes[i + 1]
         for result, label in zip(results, labels, strict=True):
             ax.plot(result.t, result.torque[:, i], lw=0.8, label=label)
-        ax.set_ylabel(f"$u_{i + 1}$ [N m]")
+        ax.set_ylabel(f"$u_{{{i + 1}}}$ [N m]")
         ax.grid(True, alpha=0.3)
     axes[1].legend(fontsize="small")
     axes[-1].set_xlabel("time [s]")
@@ -376,10 +395,10 @@ def _torque_axes(axes: Axes, result: Run, label_prefix: str) -> None:
             lw=0.7,
             alpha=0.8,
             color=f"C{i % 10}",
-            label=f"{label_prefix}$u_{i + 1}$",
+            label=f"{label_prefix}$u_{{{i + 1}}}$",
         )
     handles, labels = axes.get_legend_handles_labels()
-    axes.legend(handles[::-1], labels[::-1], ncol=min(result.dof, 4), fontsize="small")
+    _joint_legend(axes, handles[::-1], labels[::-1], ncol=min(result.dof, 4))
     units = sorted(set(_torque_units(result)), reverse=True)
     axes.set(xlabel="time [s]", ylabel=f"torque [{', '.join(units)}]")
     axes.grid(True, alpha=0.3)
