@@ -6,6 +6,8 @@ started at the ceiling; a run ending above its floor is a soundness bug (exit st
     python scripts/attack_certificate.py --seed 12 --draws 10
     python scripts/attack_certificate.py --arm ur5 --seed 1 --draws 4
     python scripts/attack_certificate.py --arm panda --seed 1 --draws 6 --only 5
+    python scripts/attack_certificate.py --arm ur5 --edge --seed 7 --draws 4
+    python scripts/attack_certificate.py --arm chain4 --edge --duration 1
 
 ``--arm rr_planar`` (the paper's RR arm, Table I's box): a draw picks the period (1 ms, 0.5 ms,
 0.2 ms), Kr (10-45), epsilon (5e-3-2e-2), the disturbance bound (2-10 N m) and a sinusoid
@@ -23,6 +25,15 @@ the first and last vertices, 14 others drawn at random and 2 interior plants dra
 (``box.sample``). These rows add the plant that came closest and the draw's CPU time, and each
 run that ends above its floor is described in full on stderr.
 
+``--edge`` attacks the certificate where it is tightest: each draw is certified once at its
+drawn period (doubled while the largest certified period it reports is the cap, twice the
+period), then the period is redrawn between 0.7 and 0.97 times that largest certified period
+(the floor then lies just below ``epsilon``), and the configuration is certified and run at
+that period. ``--arm chainN`` is the ``N``-link chain of
+``urpc bench certificate`` (``urpc.studies.benchmark.certificate_cost.chain_urdf``, every mass
++-10 %), drawn like the other generic arms (start it with ``--edge``: its largest periods are
+tens of microseconds).
+
 Each row gives the floor, the worst plant's error over the last half of the run (4 s, or
 ``--duration``) and their ratio; uncertified draws (reported "no", with the first failed
 condition for the arms other than the RR arm) are not run. ``--only K`` reruns draw K of a seed
@@ -34,22 +45,32 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
 import urpc
+from urpc.studies.benchmark.certificate_cost import benchmark_arm
 from urpc.studies.demo.synthesis import synthesize_configuration
 from urpc.studies.scenario import load_scenario
 from urpc.studies.scenario.setup import describe_point
 from urpc.trajectories import SinusoidTrajectory
 from urpc.trajectory_generic import home_configuration
 
-ARMS = ("rr_planar", "ur5", "panda", "arm_3dof")
+ARMS = ("rr_planar", "ur5", "panda", "arm_3dof", "chainN")
 #: The shipped scenario whose robot (locked joints included) and box an arm is attacked with.
 SCENARIOS = {"ur5": "ur5/sampled", "panda": "panda/joint_friction"}
 #: The periods [s] drawn per arm (those its box is certified at, on the generic reference).
 PERIODS = {"ur5": (1e-4, 2e-4, 3e-4), "panda": (1e-4, 2e-4, 3e-4), "arm_3dof": (1e-4, 5e-4)}
+#: A chain's first period [s] (``--edge`` then moves it near its largest certified period).
+CHAIN_PERIOD = 2e-5
+#: ``--edge``: the period is redrawn in this fraction of the largest certified period.
+EDGE_FRACTION = (0.7, 0.97)
+#: ``--edge``: at most this many doublings of the period while the largest certified period
+#: reaches the certificate's cap of twice the controller's period.
+EDGE_DOUBLINGS = 4
 #: Simulated (and certified) time [s]; the error is measured over its last half.
 DURATION = 4.0
 #: Vertices run per draw at most (all of them when the box has no more), and interior plants
@@ -81,7 +102,7 @@ def draw_generic(rng: np.random.Generator, arm: str, nominal):
     """A configuration of an arm other than the RR arm: its reference is a generic sinusoid
     (:func:`urpc.generic_trajectory`) about a random home with random phases, every drawn number
     rounded so that the label rebuilds it exactly."""
-    period = float(rng.choice(PERIODS[arm]))
+    period = CHAIN_PERIOD if is_chain(arm) else float(rng.choice(PERIODS[arm]))
     Kr = float(rng.choice([10.0, 20.0, 30.0, 45.0]))
     epsilon = float(rng.choice([1e-2, 2e-2]))
     d = float(rng.choice([1.0, 2.0, 5.0]))
@@ -115,8 +136,15 @@ def plants(box, rng: np.random.Generator) -> list[tuple[str, object]]:
     return chosen + [(f"interior {k}", box.sample(rng)) for k in range(INTERIOR)]
 
 
-def load_arm(arm: str):
-    """The URDF's robot (the plants are built on it) and the arm's box."""
+def is_chain(arm: str) -> bool:
+    return arm.startswith("chain") and arm[5:].isdigit() and int(arm[5:]) > 0
+
+
+def load_arm(arm: str, folder: Path):
+    """The URDF's robot (the plants are built on it) and the arm's box (a chain's URDF written
+    in ``folder``)."""
+    if is_chain(arm):
+        return benchmark_arm(arm, folder)
     if arm == "rr_planar":
         robot = urpc.load_robot("rr_planar")
         return robot, urpc.load_uncertainty("rr_planar", robot)
@@ -135,7 +163,12 @@ def main(argv=None) -> int:
         epilog=rest,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("--arm", choices=ARMS, default="rr_planar", help="default rr_planar")
+    parser.add_argument(
+        "--arm", default="rr_planar", help=f"one of {', '.join(ARMS)} (default rr_planar)"
+    )
+    parser.add_argument(
+        "--edge", action="store_true", help="periods near the largest certified one (see below)"
+    )
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--draws", type=int, default=8, help="configurations (default 8)")
     parser.add_argument(
@@ -143,8 +176,11 @@ def main(argv=None) -> int:
     )
     parser.add_argument("--only", type=int, metavar="K", help="run only draw K (0-based)")
     args = parser.parse_args(argv)
+    if args.arm not in ARMS[:-1] and not is_chain(args.arm):
+        parser.error(f"--arm {args.arm}: valid: {', '.join(ARMS)} (N a positive integer)")
     rng = np.random.default_rng(args.seed)
-    robot, box = load_arm(args.arm)
+    with tempfile.TemporaryDirectory() as folder:
+        robot, box = load_arm(args.arm, Path(folder))
     nominal = box.nominal_robot(robot)
     duration = args.duration
     extended = args.arm != "rr_planar"  # the plant that came closest, the CPU time, the details
@@ -159,11 +195,28 @@ def main(argv=None) -> int:
         drawn = draw_generic(rng, args.arm, nominal) if extended else draw(rng)
         period, Kr, epsilon, d, reference, label = drawn
         points = plants(box, rng)  # the RR arm's 8 vertices draw nothing
+        fraction = rng.uniform(*EDGE_FRACTION) if args.edge else None
         if args.only is not None and k != args.only:
             continue
         controller = urpc.synthesize(robot, box, epsilon, sample_period=period, Kr=Kr)
         start = time.process_time()
         certificate = urpc.certify(controller, reference, duration=duration, disturbance_bound=d)
+        for _ in range(EDGE_DOUBLINGS if fraction is not None else 0):
+            # The largest period reported is at most twice the controller's: double it while
+            # it reaches that cap.
+            if certificate.max_sample_period < 2 * period * (1 - 1e-9):
+                break
+            period *= 2
+            controller = urpc.synthesize(robot, box, epsilon, sample_period=period, Kr=Kr)
+            certificate = urpc.certify(
+                controller, reference, duration=duration, disturbance_bound=d
+            )
+        if fraction is not None and certificate.max_sample_period > 0:
+            period = float(f"{fraction * certificate.max_sample_period:.3g}")
+            controller = urpc.synthesize(robot, box, epsilon, sample_period=period, Kr=Kr)
+            certificate = urpc.certify(
+                controller, reference, duration=duration, disturbance_bound=d
+            )
         row = f"| {period * 1e3:g} | {Kr:g} | {epsilon:g} | {d:g} | {label} | "
         if not certificate.certified:
             why = f": {certificate.failed[0].name}" if extended and certificate.failed else ""
@@ -185,7 +238,8 @@ def main(argv=None) -> int:
                 worst, closest = error, name
             if extended and error > floor:
                 print(
-                    f"BEATEN: --arm {args.arm} --seed {args.seed} --only {k}: T = {period:g} s, "
+                    f"BEATEN: --arm {args.arm}{' --edge' if args.edge else ''} --seed {args.seed} "
+                    f"--only {k}: T = {period:g} s, "
                     f"Kr = {Kr:g}, epsilon = {epsilon:g}, d = {d:g} N m, duration {duration:g} s, "
                     f"{label}; reference amplitude {reference.amplitude.tolist()}, frequency "
                     f"{reference.frequency.tolist()}; {name} ({describe_point(box, point)}): "
