@@ -54,7 +54,8 @@ from .interval import IntervalPassivityController
 #: version and a digest of its source.)
 #: 4: cells refined where the floor needs them, Taylor Coriolis forms, zonotopes, the motion of
 #: the disturbance's response, the reference within the effort limits.
-CERTIFICATE_VERSION = 4
+#: 5: the disturbance's response also bounded by Cauchy-Schwarz (several light modes).
+CERTIFICATE_VERSION = 5
 #: The condition a delayed torque fails (the law's delay or the plant's actuation delay).
 DELAY_CONDITION = "actuation delay counted by the argument"
 

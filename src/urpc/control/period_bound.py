@@ -148,10 +148,10 @@ class PeriodBound:
         b = T * (p["K"] * (0.5 + p["nu"]) + p["coriolis"] + damping) + growth
         sqrt_L, sqrt_U = np.sqrt(lam_L), np.sqrt(lam_U)
         equilibrium = T * (R + 0.5 * T * lag) + V / D
-        response = T * d * (q["trace_inverse"] + n / (D * T))
+        safe_a = np.maximum(a, 1e-300)
+        response = disturbance_response(T, d, D, q["trace_inverse"], q["law_lam_L"], lam_L, a, n)
         rate_M = np.minimum(rate_inverse_M, sqrt_U * rate_inverse)
         equilibrium_M = T * (RM + 0.5 * T * lag_M) + sqrt_U * V / D
-        safe_a = np.maximum(a, 1e-300)
         response_M = T * d / (safe_a * sqrt_L)
         # The disturbance's response r_d is that of the plant frozen at the sample (any history
         # of ||d_j|| <= d): it moves as the plant does. In the plant's metric, with
@@ -241,6 +241,26 @@ class PeriodBound:
             )
             bound = np.maximum(bound, piece.max(axis=0))
         return bound * (1 + 1e-12)
+
+
+def disturbance_response(T, d, D, trace_inverse, law_lam_L, lam_L, a, n: int) -> np.ndarray:
+    """A bound of ``||r_d||`` [rad/s], the response of the loop frozen at a sample to any history
+    of disturbances ``||d_j|| <= d`` [N m]: ``r_d = sum_j Phi_j d_j`` with ``Phi_j = T M^-1/2 (1 -
+    A)^j M^-1/2`` positive semi-definite, summing to ``S = T (T K)^-1 = T (M_L^-1 + (D T)^-1)``
+    (docs/sampled-data.md §2), so ``||r_d|| <= d sup_x sum_j ||Phi_j x||`` over unit ``x``. The
+    smaller of two bounds of that sum: the trace, ``sum_j ||Phi_j|| <= tr S``, and
+    Cauchy-Schwarz, ``sum_j ||Phi_j x|| <= (sum_j ||Phi_j||)^1/2 (x^T S x)^1/2`` with ``sum_j
+    ||Phi_j|| <= T / (lambda_L a)`` and ``x^T S x <= T (1 / lambda_L(M_L) + 1 / (D T))``. The
+    second wins when several modes are light (the Panda), the first when one is (the UR5, whose
+    trace is 1.3 times its lightest mode's inverse).
+
+    ``trace_inverse`` bounds ``tr M_L^-1`` of the law's model from above, ``law_lam_L`` its least
+    eigenvalue from below, ``lam_L`` the plant's, ``a`` the contraction (``A >= a``)."""
+    safe_a = np.maximum(a, 1e-300)
+    trace = trace_inverse + n / (D * T)
+    inverse_law = 1.0 / np.maximum(law_lam_L, 1e-300) + 1.0 / (D * T)
+    with np.errstate(invalid="ignore"):  # a is nan where an inertia model fails: the trace
+        return T * d * np.fmin(trace, np.sqrt(inverse_law / (lam_L * safe_a)))
 
 
 def response_sum(a: np.ndarray, terms: int = 4096) -> np.ndarray:
