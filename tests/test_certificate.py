@@ -250,6 +250,29 @@ def test_the_floor_bounds_sampled_ur5_plants_under_the_worst_disturbance(ur5):
         assert np.all(np.abs(result.torque[final]).max(axis=0) <= bound), k
 
 
+def test_the_floor_bounds_panda_plants_where_several_light_modes_decide_the_response(panda):
+    """The Panda's drive box at 0.1 ms: its wrist has several light modes, so the disturbance's
+    response is bounded by Cauchy-Schwarz rather than the trace (docs/sampled-data.md §2); the
+    box's first and last vertices and an interior plant under the worst-case disturbance."""
+    from urpc.studies.scenario import load_scenario
+
+    box = urpc.load_uncertainty(load_scenario("panda/joint_friction").uncertainty, panda)
+    period, d = 1e-4, 2.0
+    controller = urpc.synthesize(panda, box, 1e-2, sample_period=period, Kr=30.0)
+    trajectory = generic_trajectory(box.nominal_robot(panda))
+    certificate = certify(controller, trajectory, duration=1.0, disturbance_bound=d)
+    assert certificate.certified, certificate.summary()
+    rng = np.random.default_rng(5)
+    points = [box.vertex(0), box.vertex(2**box.n_uncertain - 1), box.sample(rng)]
+    for k, point in enumerate(points):
+        result = urpc.simulate(
+            box.plant(panda, point), controller, trajectory, duration=1.0,
+            q0=trajectory.reference(0.0).q, disturbance_bound=d,
+            disturbance="worst", controller_state0=_saturated(controller),
+        )  # fmt: skip
+        assert _final_error(result, 0.5) <= certificate.epsilon_floor, (k, certificate.summary())
+
+
 def test_the_time_above_epsilon_before_saturation_is_bounded(rr, rr_box):
     """While the gains grow, each sample with ||e_k|| >= epsilon adds T ||e_k|| >= T epsilon to
     the integral, which stops at s_max: at most s_max / epsilon seconds above epsilon."""
