@@ -176,6 +176,8 @@ CASES: dict[str, Case] = {
     "box_joint_relative_lo_gt_hi": _box_case("joints: {joint1: {friction: [2, 1]}}", "joints.joint1.friction", "greater than"),
     # ------------------------------------------------- issue 21: hostile and unchecked inputs
     "point_joints_without_box_section": Case({"point.yaml": "joints: {joint1: {friction: 0.5}}"}, ["simulate", "--robot", "rr_planar", "--true-params", "{tmp}/point.yaml", "--duration", "0.01"], lambda tmp: urpc.load_parameter_point(tmp / "point.yaml", urpc.load_robot("rr_planar"), urpc.load_uncertainty("rr_planar", urpc.load_robot("rr_planar"))), ("joints.joint1.friction", "no 'joints:' section")),
+    "point_negative_inertia": Case({"point.yaml": "links: {link2: {ixx: -1}}"}, ["simulate", "rr_planar/s3_ic1", "--no-certify", "--true-params", "{tmp}/point.yaml", "--duration", "0.01"], lambda tmp: urpc.load_parameter_point(tmp / "point.yaml", urpc.load_robot("rr_planar"), urpc.load_uncertainty("rr_planar", urpc.load_robot("rr_planar"))), ("links.link2", "not physical", "ixx = -1")),
+    "identify_excite_negative_seed": Case({}, ["identify", "rr_planar", "--excite", "--out", "{tmp}/ex.csv", "--seed", "-1"], None, ("--seed", "integer >= 0"), names_file=""),
     "simulate_out_unwritable_for_root_too": Case({}, ["simulate", "rr_planar/s3_ic1", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
     "campaign_out_unwritable_for_root_too": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "2", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
     "campaign_neither_scenario_nor_robot": Case({}, ["campaign", "--runs", "2"], None, ("give a scenario file", "--robot"), names_file=""),

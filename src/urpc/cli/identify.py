@@ -16,6 +16,7 @@ from .common import (
     add_new_file_arguments,
     add_robot_positional,
     non_negative_float,
+    non_negative_int,
     positive_float,
     positive_int,
     print_json,
@@ -113,7 +114,9 @@ def register(commands) -> None:
         metavar="A",
         help="--excite: bound of |qdd| [rad/s^2] (default 3)",
     )
-    p.add_argument("--seed", type=int, default=0, metavar="N", help="--excite: seed (default 0)")
+    p.add_argument(
+        "--seed", type=non_negative_int, default=0, metavar="N", help="--excite: seed (default 0)"
+    )
     add_json_argument(p)
 
 

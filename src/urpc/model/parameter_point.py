@@ -106,7 +106,12 @@ def load_parameter_point(path: str | Path, robot: Robot, box: ParameterBox) -> P
         coordinates = link_box.nominal.copy()
         for key, value in entry.values().items():
             coordinates[link_box.fields.index(key)] = value
-        problem = inertia_problem(np.asarray(link_box.inertia(coordinates).inertia))
+        try:
+            problem = inertia_problem(np.asarray(link_box.inertia(coordinates).inertia))
+        except (RuntimeError, ValueError) as error:  # Pinocchio refuses a negative tensor
+            problem = (
+                f"{error} (given: {', '.join(f'{k} = {v:g}' for k, v in entry.values().items())})"
+            )
         if problem:
             raise InputError(
                 f"the inertia of '{name}' is not physical: {problem}",
