@@ -157,3 +157,22 @@ def test_a_scenario_that_declares_an_actuation_delay_the_law_ignores_is_warned_a
     summary = json.loads(done.stdout)
     assert summary["actuation_delay"] == 1 and summary["delay"] == 0, summary
     assert "1 sample(s) late (actuation_delay)" in done.stderr and "--delay 1" in done.stderr
+
+
+def test_a_robot_with_another_number_of_joints_is_named_on_both_sides():
+    """A 1-joint virtual robot (joint2 locked) and a 2-joint loop: the loop says which joints it
+    expects and that the robot's states do not fit; the robot says a controller for 2 joints
+    said HELLO. Neither side starts the arm."""
+    process, port = start_robot("--lock", "joint2", "--wait", "6")
+    done = subprocess.run(
+        [*URPC, "run", "rr_planar/s3_ic1", "--robot-address", f"udp://127.0.0.1:{port}"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    out, _ = finish(process)
+    assert done.returncode == 2 and done.stderr.startswith("error:"), done.stderr
+    assert "Traceback" not in done.stderr and done.stderr.count("\n") == 1
+    assert "2 joints (joint1, joint2)" in done.stderr and "--lock" in done.stderr
+    assert "a controller for 2 joints said HELLO; this arm has 1" in out
+    assert "0 states sent" in out  # the arm never started

@@ -199,6 +199,14 @@ def run_robot(args) -> int:
     first = robot.read_state(5.0)
     if first is None:
         robot.stop()
+        if robot.last_error:  # it answers, with datagrams this loop cannot use
+            raise InputError(
+                f"the robot at {args.robot_address} answers with states this loop refuses "
+                f"({robot.last_error}): the scenario's robot has {setup.robot.dof} joints "
+                f"({', '.join(setup.robot.joint_names)}); lock or unlock joints (--lock) so that "
+                "the loop and the robot drive the same arm",
+                field="robot-address",
+            )
         raise InputError(
             f"no state from the robot at {args.robot_address} within 5 s; start it first "
             "(urpc virtual-robot ROBOT --port P)",

@@ -146,6 +146,18 @@ def encode_torque(seq: int, tau: np.ndarray, flags: int = 0) -> bytes:
     return header + np.asarray(tau, dtype="<f8").tobytes()
 
 
+def hello_joints(data: bytes) -> int | None:
+    """The joint count of ``data`` if it is a HELLO torque packet (of any joint count, even one
+    whose size does not match it), else ``None``: lets a robot tell a controller for another
+    arm from noise."""
+    if len(data) < _TORQUE_HEADER.size:
+        return None
+    magic, version, joints, flags, _, _ = _TORQUE_HEADER.unpack_from(data)
+    if magic != TORQUE_MAGIC or version != VERSION or not flags & HELLO:
+        return None
+    return joints
+
+
 def decode_torque(data: bytes, n: int) -> TorquePacket:
     """The torque in ``data``, which must be a version-1 torque packet of ``n`` joints."""
     if len(data) != torque_size(n):

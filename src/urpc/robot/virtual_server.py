@@ -19,7 +19,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from .packet import HELLO, STOP, PacketError, decode_torque, encode_state, torque_size
+from .packet import (
+    HELLO,
+    STOP,
+    PacketError,
+    decode_torque,
+    encode_state,
+    hello_joints,
+    torque_size,
+)
 from .udp import LOOPBACK
 from .virtual import VirtualArm
 
@@ -38,9 +46,17 @@ class ServeReport:
     late_periods: int
     late_ticks: int
     stop_latency: float | None
+    arm_joints: int
+    #: The joint count of a controller for another arm that said HELLO, if one did.
+    foreign_joints: int | None = None
 
     def lines(self) -> list[str]:
         lines = [self.reason]
+        if self.foreign_joints is not None:
+            lines.append(
+                f"  a controller for {self.foreign_joints} joints said HELLO; this arm has "
+                f"{self.arm_joints} (lock or unlock joints so that both have the same)"
+            )
         if self.stop_latency is not None:
             lines.append(f"  arm braked {self.stop_latency * 1e3:.1f} ms after the last torque")
         lines.append(
@@ -84,7 +100,9 @@ def serve(
     rng = np.random.default_rng(options.seed + 1)
     size = torque_size(n)
     peer = None
-    counts = dict(sent=0, received=0, lost_states=0, lost_torques=0, bad=0, late_ticks=0)
+    counts = dict(
+        sent=0, received=0, lost_states=0, lost_torques=0, bad=0, late_ticks=0, foreign=None
+    )
     reason = None
 
     def drain(until: float, need_current: bool) -> None:
@@ -102,6 +120,16 @@ def serve(
                 continue
             if len(data) != size:
                 counts["bad"] += 1
+                joints = hello_joints(data)
+                if joints is not None and peer is None:
+                    # A controller for another arm: one state back, so that it can say why it
+                    # refuses it; this arm keeps waiting for its own controller.
+                    counts["foreign"] = joints
+                    q, qd = arm.measure()
+                    try:
+                        sock.sendto(encode_state(arm.wire_seq, 0.0, q, qd, arm.flags()), sender)
+                    except OSError:
+                        pass
                 continue
             try:
                 packet = decode_torque(data, n)
@@ -182,6 +210,8 @@ def _serve_report(reason: str, arm: VirtualArm, counts: dict) -> ServeReport:
         arm.late,
         counts["late_ticks"],
         latency,
+        arm.dof,
+        counts["foreign"],
     )
 
 
