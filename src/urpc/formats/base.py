@@ -88,6 +88,7 @@ def read_yaml(path: str | Path) -> Any:
             )
         text = data.decode("utf-8")
         _check_yaml_size(text, path)
+        _refuse_duplicate_keys(text, path)
         return yaml.load(text, Loader=_SafeLoader)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
@@ -136,6 +137,37 @@ def _check_yaml_size(text: str, path: Path) -> None:
                 "holds a few hundred (an alias bomb?)",
                 source=path,
             )
+
+
+def _refuse_duplicate_keys(text: str, path: Path) -> None:
+    """Refuse a mapping that gives a key twice (YAML would keep the last one silently: an
+    ``epsilon:`` edited further down, a link listed twice), from the event stream, naming the
+    key's place and both lines."""
+    stack: list[list] = []  # per open collection: [mapping?, nodes seen, {key: line}, key]
+    for event in yaml.parse(text, Loader=_SafeLoader):
+        if isinstance(event, yaml.CollectionEndEvent):
+            stack.pop()
+            continue
+        if not isinstance(event, (yaml.ScalarEvent, yaml.AliasEvent, yaml.CollectionStartEvent)):
+            continue
+        if stack:
+            parent = stack[-1]
+            is_key = parent[0] and parent[1] % 2 == 0
+            parent[1] += 1
+            if is_key and isinstance(event, yaml.ScalarEvent):
+                line = event.start_mark.line + 1 if event.start_mark else 0
+                if event.value in parent[2]:
+                    keys = [entry[3] for entry in stack[:-1] if entry[0] and entry[3] is not None]
+                    raise InputError(
+                        f"'{event.value}' is given twice (lines {parent[2][event.value]} and "
+                        f"{line}); YAML would keep only the last: remove one",
+                        source=path,
+                        field=".".join([*keys, event.value]),
+                    )
+                parent[2][event.value] = line
+                parent[3] = event.value
+        if isinstance(event, yaml.CollectionStartEvent):
+            stack.append([isinstance(event, yaml.MappingStartEvent), 0, {}, None])
 
 
 def validate(
