@@ -5,6 +5,8 @@ checked column by column (:func:`load_samples`).
 from __future__ import annotations
 
 import re
+import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -17,79 +19,143 @@ _NAME = re.compile(r"^(qdd|qd|q)[_\s-]?(\d+)$")
 
 def load_samples(path: str | Path, dof: int | None = None, joint_names=()) -> FileTrajectory:
     """Read a trajectory file: a CSV (a header row ``t, q1..qn[, qd1..qdn[, qdd1..qddn]]``, names
-    ``q1``/``q_1``/a joint's name for positions, ``qd1``, ``qdd1`` for derivatives; or no header and
-    ``1 + n``, ``1 + 2n`` or ``1 + 3n`` columns) or an NPZ (arrays ``t``, ``q`` and optionally
-    ``qd``, ``qdd``).
+    ``q1``/``q_1``/a joint's name for positions, ``qd1``, ``qdd1`` for derivatives, in any order
+    after ``t``, each joint once; or no header and ``1 + n``, ``1 + 2n`` or ``1 + 3n`` columns) or
+    an NPZ (arrays ``t``, ``q`` and optionally ``qd``, ``qdd``, each ``(samples, joints)``).
 
     Raises:
-        InputError: a missing or unreadable file, wrong columns, a non-finite value, times that do
-            not increase (the sample is named).
+        InputError: a missing or unreadable file, wrong or repeated columns, a row with too many
+            or too few values, a non-finite value, times that do not increase (the sample, and in
+            a CSV the line, is named).
     """
     path = Path(path)
     if not path.is_file():
         raise InputError(no_file(path, "trajectory file"), path)
     if path.suffix.lower() == ".npz":
-        try:
-            with np.load(path, allow_pickle=False) as archive:
-                data = {k: archive[k] for k in archive.files}
-        except (OSError, ValueError) as exc:
-            raise InputError(f"not a readable NPZ file ({exc})", path) from None
-        if "t" not in data or "q" not in data:
-            raise InputError(
-                f"needs arrays 't' and 'q'; found {', '.join(sorted(data)) or 'none'}", path
-            )
-        q = np.asarray(data["q"], dtype=float)
-        q = q[:, None] if q.ndim == 1 else q
-        _check_dof(q.shape[1], dof, path)
-        return FileTrajectory(data["t"], q, data.get("qd"), data.get("qdd"), source=path)
+        return _load_npz(path, dof)
     if path.suffix.lower() != ".csv":
         raise InputError(f"unknown trajectory file type '{path.suffix}'; valid: .csv, .npz", path)
-    text = path.read_text().splitlines()
-    rows = [line for line in text if line.strip() and not line.lstrip().startswith("#")]
+    return _load_csv(path, dof, joint_names)
+
+
+# ============================================================================ NPZ
+def _load_npz(path: Path, dof: int | None) -> FileTrajectory:
+    if not zipfile.is_zipfile(path):
+        raise InputError(
+            "not a readable NPZ file (not a zip archive); save it with numpy.savez(path, t=..., "
+            "q=...)",
+            path,
+        )
+    try:
+        with np.load(path, allow_pickle=False) as archive:
+            data = {k: archive[k] for k in archive.files}
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
+        raise InputError(f"not a readable NPZ file ({exc})", path) from None
+    if "t" not in data or "q" not in data:
+        raise InputError(
+            f"needs arrays 't' and 'q'; found {', '.join(sorted(data)) or 'none'}", path
+        )
+    t = _numbers(data["t"], "t", path)
+    if t.ndim == 2 and t.shape[1] == 1:
+        t = t[:, 0]
+    if t.ndim != 1:
+        raise InputError(
+            f"array 't' has shape {_shape(t)}; expected (samples,), one time per sample", path, "t"
+        )
+    samples = len(t)
+    q = _numbers(data["q"], "q", path)
+    joints = dof if dof is not None else (q.shape[1] if q.ndim == 2 else 1)
+    q = q[:, None] if q.ndim == 1 and joints == 1 else q
+    _check_shape(q, "q", samples, joints, path)
+    _check_dof(q.shape[1], dof, path)
+    derivatives = {}
+    for key in ("qd", "qdd"):
+        if key in data:
+            values = _numbers(data[key], key, path)
+            values = values[:, None] if values.ndim == 1 and q.shape[1] == 1 else values
+            _check_shape(values, key, samples, q.shape[1], path)
+            derivatives[key] = values
+    if "qdd" in derivatives and "qd" not in derivatives:
+        raise InputError("array 'qdd' needs array 'qd' too", path, "qdd")
+    return FileTrajectory(t, q, derivatives.get("qd"), derivatives.get("qdd"), source=path)
+
+
+def _shape(values: np.ndarray) -> str:
+    return str(tuple(values.shape))
+
+
+def _numbers(values: np.ndarray, key: str, path: Path) -> np.ndarray:
+    """``values`` as floats, or an error naming the array and what it holds."""
+    if values.dtype.kind not in "biuf":
+        raise InputError(
+            f"array '{key}' holds {values.dtype.name} values (dtype {values.dtype.str}); expected "
+            "numbers",
+            path,
+            key,
+        )
+    return np.asarray(values, dtype=float)
+
+
+def _check_shape(values: np.ndarray, key: str, samples: int, joints: int | None, path) -> None:
+    expected = f"({samples}, {joints if joints is not None else 'joints'})"
+    if (
+        values.ndim != 2
+        or values.shape[0] != samples
+        or (joints is not None and values.shape[1] != joints)
+    ):
+        raise InputError(
+            f"array '{key}' has shape {_shape(values)}; expected (samples x joints) = {expected} "
+            f"({samples} samples of 't')",
+            path,
+            key,
+        )
+
+
+# ============================================================================ CSV
+def _load_csv(path: Path, dof: int | None, joint_names) -> FileTrajectory:
+    raw = path.read_bytes()
+    try:
+        text = raw.decode("utf-8-sig").splitlines()
+    except UnicodeDecodeError as exc:
+        raise InputError(
+            f"cannot read the file as UTF-8 text (byte 0x{raw[exc.start]:02x} at offset "
+            f"{exc.start}); save it as a UTF-8 CSV",
+            path,
+        ) from None
+    rows = [
+        (number, line)
+        for number, line in enumerate(text, start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
     if not rows:
         raise InputError("the file has no samples", path)
-    first = [cell.strip() for cell in rows[0].split(",")]
+    first = [cell.strip() for cell in rows[0][1].split(",")]
     has_header = not _is_number(first[0])
-    header_lines = text.index(rows[0]) + 1 if has_header else text.index(rows[0])
-    try:
-        table = np.array(
-            [[float(c) for c in r.split(",")] for r in rows[1 if has_header else 0 :]], ndmin=2
-        )
-    except ValueError as exc:
-        raise InputError(
-            f"a value is not a number ({exc}); expected t, q1..qn per row", path
-        ) from None
-    if table.size == 0:
+    header_lines = rows[0][0] if has_header else rows[0][0] - 1
+    body = rows[1:] if has_header else rows
+    if not body:
         raise InputError("the file has a header but no samples", path)
+    width = len(first)
+    table = np.empty((len(body), width))
+    for i, (number, line) in enumerate(body):
+        cells = [cell.strip() for cell in line.split(",")]
+        if len(cells) != width:
+            what = "the header has" if has_header else "the first row has"
+            raise InputError(f"line {number} has {len(cells)} values; {what} {width} columns", path)
+        for j, cell in enumerate(cells):
+            try:
+                table[i, j] = float(cell)
+            except ValueError:
+                column = f"'{first[j]}'" if has_header else str(j + 1)
+                raise InputError(
+                    f"line {number}, column {column}: '{cell}' is not a number", path
+                ) from None
     columns = table.shape[1]
     if has_header:
-        if first[0].lower() not in ("t", "time"):
-            raise InputError(f"the first column is '{first[0]}'; expected t [s]", path, "t")
-        groups: dict[str, list[int]] = {"q": [], "qd": [], "qdd": []}
-        names = list(joint_names)
-        for index, name in enumerate(first[1:], start=1):
-            match = _NAME.match(name.replace(" ", ""))
-            if match:
-                groups[match.group(1)].append(index)
-            elif name in names:
-                groups["q"].append(index)
-            else:
-                raise InputError(
-                    f"unknown column '{name}'; expected q1..qn, qd1..qdn, qdd1..qddn or joint names",
-                    path,
-                    name,
-                )
-        n = len(groups["q"])
-        for kind in ("qd", "qdd"):
-            if groups[kind] and len(groups[kind]) != n:
-                raise InputError(
-                    f"{len(groups[kind])} {kind} columns for {n} q columns", path, kind
-                )
-        _check_dof(n, dof, path)
-        pick = {kind: table[:, idx] if idx else None for kind, idx in groups.items()}
+        pick = _columns_by_name(first, table, dof, tuple(joint_names), path)
     else:
         n = dof or columns - 1
-        if columns not in (1 + n, 1 + 2 * n, 1 + 3 * n):
+        if n < 1 or columns not in (1 + n, 1 + 2 * n, 1 + 3 * n):
             raise InputError(
                 f"{columns} columns; expected t and {n}, {2 * n} or {3 * n} more", path
             )
@@ -102,6 +168,74 @@ def load_samples(path: str | Path, dof: int | None = None, joint_names=()) -> Fi
     return FileTrajectory(
         table[:, 0], pick["q"], pick["qd"], pick["qdd"], source=path, header_lines=header_lines
     )
+
+
+def _columns_by_name(header, table, dof, joint_names, path) -> dict:
+    """The ``q``, ``qd``, ``qdd`` blocks of ``table`` by the header's names, in joint order:
+    ``q1..qn`` (or ``q0..q(n-1)``, or the joints' names), ``qd1..``, ``qdd1..``; an unknown or
+    repeated name is an error listing the valid ones."""
+    if header[0].lower() not in ("t", "time"):
+        raise InputError(f"the first column is '{header[0]}'; expected t [s]", path, "t")
+    names = list(joint_names) if dof is None or len(joint_names) == dof else []
+    parsed = []  # (column, name, kind, number or joint name)
+    for column, name in enumerate(header[1:], start=1):
+        match = _NAME.match(name.replace(" ", ""))
+        if match:
+            parsed.append((column, name, match.group(1), int(match.group(2))))
+        elif name in names:
+            parsed.append((column, name, "q", name))
+        else:
+            parsed.append((column, name, None, None))
+    numbers = [p[3] for p in parsed if isinstance(p[3], int)]
+    base = 0 if 0 in numbers else 1
+    count = dof
+    if count is None:
+        count = sum(1 for p in parsed if p[2] == "q") or 1
+    valid = (
+        [f"q{k + base}" for k in range(count)]
+        + names
+        + [f"qd{k + base}" for k in range(count)]
+        + [f"qdd{k + base}" for k in range(count)]
+    )
+    groups: dict[str, dict[int, tuple[int, str]]] = {"q": {}, "qd": {}, "qdd": {}}
+    for column, name, kind, key in parsed:
+        joint = names.index(key) if isinstance(key, str) else None
+        if isinstance(key, int) and base <= key < base + count:
+            joint = key - base
+        if kind is None or joint is None:
+            raise InputError(
+                f"unknown column '{name}' (column {column + 1}); valid: t, {', '.join(valid)}",
+                path,
+                name,
+            )
+        if joint in groups[kind]:
+            other_column, other = groups[kind][joint]
+            raise InputError(
+                f"column '{name}' (column {column + 1}) repeats joint {joint + 1}, already given "
+                f"by '{other}' (column {other_column + 1}); give each joint once",
+                path,
+                name,
+            )
+        groups[kind][joint] = (column, name)
+    n = len(groups["q"])
+    if n == 0:
+        raise InputError(f"no joint position columns; valid: t, {', '.join(valid)}", path, "q")
+    _check_dof(n, dof, path)
+    for kind in ("q", "qd", "qdd"):
+        found = groups[kind]
+        if found and len(found) != count:
+            missing = [f"{kind}{k + base}" for k in range(count) if k not in found]
+            raise InputError(
+                f"{len(found)} {kind} columns for {count} joints: missing {', '.join(missing)}",
+                path,
+                kind,
+            )
+    if groups["qdd"] and not groups["qd"]:
+        raise InputError("qdd columns need qd columns too", path, "qdd")
+    return {
+        kind: table[:, [found[k][0] for k in range(count)]] if found else None
+        for kind, found in groups.items()
+    }
 
 
 def _is_number(text: str) -> bool:

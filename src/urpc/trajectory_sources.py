@@ -40,15 +40,20 @@ def check_limits(
 ) -> None:
     """Refuse a trajectory that leaves the robot's position or velocity limits, or
     ``acceleration_limit`` [rad/s^2] (scalar or per joint; ``None``: none), on a grid of ``step``
-    [s] over its samples (``times``, default: its own ``t`` or ``times``); the error names the
-    joint and the sample nearest to its worst violation."""
+    [s] over its samples (``times``, default: its own ``t`` or ``times``), at every sample, and at
+    every interior extremum of each polynomial piece's position, velocity and acceleration (so a
+    segment shorter than ``step`` cannot hide a peak); the error names the joint and the sample
+    nearest to its worst violation."""
     samples = np.asarray(
         times
         if times is not None
         else getattr(trajectory, "t", getattr(trajectory, "times", [0.0])),
         dtype=float,
     )
-    grid = np.union1d(samples, np.arange(samples[0], samples[-1] + step, step))
+    grid = np.union1d(
+        np.union1d(samples, np.arange(samples[0], samples[-1] + step, step)),
+        _critical_times(trajectory, samples),
+    )
     q, qd, qdd = trajectory.evaluate(grid)
     lower, upper = robot.position_limits
     velocity = np.where(
@@ -65,7 +70,7 @@ def check_limits(
         ),
     ]
     if acceleration_limit is not None:
-        limit = np.broadcast_to(np.asarray(acceleration_limit, float), (trajectory.dof,))
+        limit = per_joint(acceleration_limit, trajectory.dof, None, "acceleration_limit")
         checks.append(
             (
                 "acceleration",
@@ -91,13 +96,82 @@ def check_limits(
             )
 
 
+def per_joint(value, dof: int, source, field: str) -> np.ndarray:
+    """A limit given as one number or one per joint, as ``dof`` values, each finite and > 0; an
+    error naming ``field`` otherwise."""
+    values = np.asarray(value, dtype=float)
+    if values.ndim > 1 or (values.ndim == 1 and len(values) != dof):
+        count = (
+            f"{values.size} value{'' if values.size == 1 else 's'}"
+            if values.ndim == 1
+            else f"a nested list of shape {values.shape}"
+        )
+        raise InputError(
+            f"{count}; the robot has {dof} joints: give one number or {dof} (one per joint)",
+            source,
+            field,
+        )
+    values = np.broadcast_to(values, (dof,))
+    bad = ~(np.isfinite(values) & (values > 0))
+    if bad.any():
+        j = int(np.flatnonzero(bad)[0])
+        where = f" (joint {j + 1})" if np.ndim(value) else ""
+        raise InputError(f"must be > 0 and finite, got {values[j]:g}{where}", source, field)
+    return values
+
+
+def _critical_times(trajectory: Trajectory, samples: np.ndarray) -> np.ndarray:
+    """Times inside ``trajectory``'s polynomial pieces where a joint's position, velocity or
+    acceleration can peak between samples: the roots of the velocity, acceleration and jerk of a
+    spline (:class:`~urpc.trajectory_samples.FileTrajectory`), and for rest-to-rest quintic
+    segments (:class:`~urpc.trajectories.QuinticTrajectory`) the peak velocity at half
+    the segment and the peak accelerations at ``(3 -+ sqrt 3) / 6`` of it. Unknown kinds: a grid
+    of 64 points per interval between samples."""
+    from scipy.interpolate import BPoly, BSpline, PPoly
+
+    spline = getattr(trajectory, "_spline", None)
+    if isinstance(spline, (BSpline, BPoly)):
+        found = []
+        coefficients = spline.c.reshape(spline.c.shape[0], spline.c.shape[1], -1)
+        for j in range(coefficients.shape[2]):
+            if isinstance(spline, BSpline):
+                piece = PPoly.from_spline(BSpline(spline.t, spline.c[:, j], spline.k))
+            else:
+                piece = PPoly.from_bernstein_basis(BPoly(coefficients[:, :, j], spline.x))
+            for order in (1, 2, 3):
+                if piece.c.shape[0] > order:
+                    roots = piece.derivative(order).roots(extrapolate=False)
+                    found.append(roots[np.isfinite(roots)])
+        times = np.concatenate(found) if found else np.zeros(0)
+        return times[(times >= samples[0]) & (times <= samples[-1])]
+    if hasattr(trajectory, "points") and hasattr(trajectory, "times") and len(samples) > 1:
+        start, length = samples[:-1], np.diff(samples)
+        fractions = np.array([0.5, (3 - np.sqrt(3)) / 6, (3 + np.sqrt(3)) / 6])
+        return (start[:, None] + length[:, None] * fractions).reshape(-1)
+    if len(samples) < 2:
+        return np.zeros(0)
+    fractions = np.linspace(0, 1, 65)[1:-1]
+    return (samples[:-1, None] + np.diff(samples)[:, None] * fractions).reshape(-1)
+
+
 #: Default acceleration limit of waypoint segments [rad/s^2] when the scenario gives none.
 WAYPOINT_ACCELERATION = 5.0
 
 
+def _starts_at_zero(start: float, source, field: str, what: str) -> None:
+    if abs(start) > 1e-12:
+        raise InputError(
+            f"{what} start at t = {start:g} s; a trajectory starts at t = 0: shift the times so "
+            "the first is 0",
+            source,
+            field,
+        )
+
+
 def planned_trajectory(kind: str, options, robot, source=None) -> Trajectory:
     """The ``file`` or ``waypoints`` trajectory of a scenario's options, checked against the
-    robot's limits (:func:`check_limits`).
+    robot's limits (:func:`check_limits`): its times start at 0, its per-joint limits have one
+    value per joint.
 
     Raises:
         InputError: naming the scenario file, the field, and for a limit the sample and joint.
@@ -105,13 +179,14 @@ def planned_trajectory(kind: str, options, robot, source=None) -> Trajectory:
     dof = robot.dof
     acceleration = options.get("acceleration_limit")
     if acceleration is not None:
-        acceleration = np.broadcast_to(np.asarray(acceleration, dtype=float), (dof,))
+        acceleration = per_joint(acceleration, dof, source, "trajectory.acceleration_limit")
     if kind == "file":
         if "path" not in options:
             raise InputError(
                 "a file trajectory needs path: FILE (.csv or .npz)", source, "trajectory.path"
             )
         trajectory = load_samples(options["path"], dof, robot.joint_names)
+        _starts_at_zero(trajectory.t[0], trajectory.source, "t", "the samples")
         check_limits(
             trajectory,
             robot,
@@ -120,9 +195,29 @@ def planned_trajectory(kind: str, options, robot, source=None) -> Trajectory:
             field="trajectory",
         )
         return trajectory
-    points = np.array(options["points"], dtype=float)
+    raw = options["points"]
+    for index, point in enumerate(raw):
+        count = len(point) if isinstance(point, (list, tuple, np.ndarray)) else 1
+        if count != dof:
+            raise InputError(
+                f"{count} value{'' if count == 1 else 's'}; the robot has {dof} joints",
+                source,
+                f"trajectory.points[{index}]",
+            )
+    points = np.array(raw, dtype=float)
     if points.ndim != 2 or points.shape[1] != dof:
         raise InputError(f"each point needs {dof} joint values", source, "trajectory.points")
+    times = options.get("times")
+    if times is not None:
+        times = np.asarray(times, dtype=float).reshape(-1)
+        if len(times) != len(points):
+            raise InputError(
+                f"{len(times)} times for {len(points)} points; give one time per point",
+                source,
+                "trajectory.times",
+            )
+        if len(times):
+            _starts_at_zero(times[0], source, "trajectory.times", "the waypoints")
     velocity = robot.velocity_limit
     velocity = np.where(np.isfinite(velocity) & (velocity > 0), velocity, np.inf)
     fraction = options.get("velocity_fraction", 0.5)
@@ -130,7 +225,7 @@ def planned_trajectory(kind: str, options, robot, source=None) -> Trajectory:
     try:
         trajectory = WaypointTrajectory(
             points,
-            options.get("times"),
+            times,
             velocity_limit=fraction * velocity,
             acceleration_limit=a_limit,
         )

@@ -1,0 +1,301 @@
+"""Bad trajectory files and waypoints: one InputError naming the file, the field (and the line or
+sample) and the valid choices, never a traceback or a silently wrong trajectory."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import yaml
+
+import urpc
+from urpc.studies.scenario import build, load_scenario
+from urpc.trajectory_sources import check_limits
+
+ROBOTS = urpc.load_robot("rr_planar").urdf_path.parent
+BASE = {
+    "robot": "rr_planar",
+    "uncertainty": str(ROBOTS / "uncertainty.yaml"),
+    "true_parameters": str(ROBOTS / "true_parameters.yaml"),
+    "duration": 1.0,
+}
+
+
+def rest_samples(n=201, duration=2.0, start=0.0):
+    t = np.linspace(0, duration, n)
+    s = (1 - np.cos(np.pi * t / duration)) / 2
+    return t + start, np.stack([0.5 * s, -0.3 * s], 1)
+
+
+def write_csv(path, header, t, q):
+    lines = [header] + [",".join(f"{v:.17g}" for v in row) for row in np.column_stack([t, q])]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def scenario(tmp_path, trajectory):
+    path = tmp_path / "scenario.yaml"
+    path.write_text(yaml.safe_dump({**BASE, "trajectory": trajectory}))
+    return path
+
+
+def refused(tmp_path, trajectory) -> str:
+    path = scenario(tmp_path, trajectory)
+    with pytest.raises(urpc.InputError) as info:
+        build(load_scenario(path))
+    return str(info.value)
+
+
+# ---------------------------------------------------------------- 1. damaged NPZ files
+def test_truncated_npz_is_not_a_zip_archive(tmp_path):
+    t, q = rest_samples()
+    good = tmp_path / "good.npz"
+    np.savez(good, t=t, q=q)
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(good.read_bytes()[:100])
+    with pytest.raises(urpc.InputError, match=r"bad\.npz: not a readable NPZ file \(not a zip"):
+        urpc.load_samples(bad, 2)
+
+
+def test_text_saved_as_npz_is_not_a_zip_archive(tmp_path):
+    path = tmp_path / "text.npz"
+    path.write_text("t,q1,q2\n0,0,0\n1,1,1\n")
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(path, 2)
+    message = str(info.value)
+    assert "text.npz" in message and "not a zip archive" in message
+    assert "pickled" not in message
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "shape"),
+    [
+        ("q", lambda q: q[:, :, None], "(201, 2, 1)"),
+        ("q", lambda q: np.array(1.0), "()"),
+        ("qd", lambda q: np.zeros((5, 2)), "(5, 2)"),
+        ("q", lambda q: q[:, :1].reshape(-1), "(201,)"),
+    ],
+)
+def test_npz_array_of_the_wrong_shape_names_the_key_and_both_shapes(tmp_path, key, value, shape):
+    t, q = rest_samples()
+    arrays = {"t": t, "q": q}
+    arrays[key] = value(q)
+    path = tmp_path / "shape.npz"
+    np.savez(path, **arrays)
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(path, 2)
+    message = str(info.value)
+    assert "shape.npz" in message and f"field '{key}'" in message
+    assert f"has shape {shape}" in message and "(samples x joints) = (201, 2)" in message
+
+
+def test_npz_of_strings_names_the_key(tmp_path):
+    t, q = rest_samples()
+    path = tmp_path / "strings.npz"
+    np.savez(path, t=t, q=q.astype(str))
+    with pytest.raises(urpc.InputError, match=r"strings\.npz: field 'q': .*expected numbers"):
+        urpc.load_samples(path, 2)
+
+
+def test_damaged_npz_through_the_cli_prints_one_error_line(tmp_path):
+    (tmp_path / "bad.npz").write_bytes(b"PK\x03\x04 truncated")
+    path = scenario(tmp_path, {"kind": "file", "path": "bad.npz"})
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "urpc",
+            "simulate",
+            str(path),
+            "--no-certify",
+            "--out",
+            str(tmp_path / "out"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert run.returncode == 2, run.stderr
+    errors = [line for line in run.stderr.splitlines() if line.startswith("error:")]
+    assert len(errors) == 1 and "not a zip archive" in errors[0], run.stderr
+    assert "Traceback" not in run.stderr + run.stdout
+
+
+# ---------------------------------------------------------------- 2. encodings
+def test_csv_that_is_not_utf8_is_refused(tmp_path):
+    path = tmp_path / "utf16.csv"
+    path.write_bytes("t,q1,q2\n0,0,0\n1,0,0\n".encode("utf-16"))
+    with pytest.raises(urpc.InputError, match=r"utf16\.csv: cannot read the file as UTF-8 text"):
+        urpc.load_samples(path, 2)
+
+
+def test_csv_with_a_utf8_bom_is_read(tmp_path):
+    t, q = rest_samples()
+    plain = write_csv(tmp_path / "plain.csv", "t,q1,q2", t, q)
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbf" + plain.read_bytes())
+    assert np.array_equal(urpc.load_samples(bom, 2).q, urpc.load_samples(plain, 2).q)
+
+
+# ---------------------------------------------------------------- 3. per-joint limits
+@pytest.mark.parametrize("kind", ["file", "waypoints"])
+def test_acceleration_limit_of_the_wrong_length(tmp_path, kind):
+    t, q = rest_samples()
+    write_csv(tmp_path / "plan.csv", "t,q1,q2", t, q)
+    trajectory = (
+        {"kind": "file", "path": "plan.csv"}
+        if kind == "file"
+        else {"kind": "waypoints", "points": [[0, 0], [0.2, -0.1]]}
+    )
+    message = refused(tmp_path, {**trajectory, "acceleration_limit": [10, 10, 10]})
+    assert "scenario.yaml: field 'trajectory.acceleration_limit': 3 values" in message
+    assert "the robot has 2 joints" in message
+
+
+@pytest.mark.parametrize("kind", ["file", "waypoints"])
+@pytest.mark.parametrize("limit", [0, -5, [10, 0]])
+def test_acceleration_limit_not_positive_blames_the_scenario(tmp_path, kind, limit):
+    t, q = rest_samples()
+    write_csv(tmp_path / "plan.csv", "t,q1,q2", t, q)
+    trajectory = (
+        {"kind": "file", "path": "plan.csv"}
+        if kind == "file"
+        else {"kind": "waypoints", "points": [[0, 0], [0.2, -0.1]]}
+    )
+    message = refused(tmp_path, {**trajectory, "acceleration_limit": limit})
+    assert "scenario.yaml: field 'trajectory.acceleration_limit': must be > 0" in message
+    assert "plan.csv" not in message and "trajectory.points" not in message
+
+
+def test_check_limits_refuses_a_limit_list_of_the_wrong_length():
+    trajectory = urpc.from_samples(*rest_samples())
+    with pytest.raises(urpc.InputError, match="field 'acceleration_limit': 3 values"):
+        check_limits(trajectory, urpc.load_robot("rr_planar"), acceleration_limit=[1, 2, 3])
+
+
+# ---------------------------------------------------------------- 4. uneven waypoints
+def test_waypoints_of_uneven_length_name_the_point(tmp_path):
+    message = refused(tmp_path, {"kind": "waypoints", "points": [[0, 0], [0.5]]})
+    assert "field 'trajectory.points[1]': 1 value; the robot has 2 joints" in message
+
+
+def test_waypoint_times_one_per_point(tmp_path):
+    message = refused(
+        tmp_path, {"kind": "waypoints", "points": [[0, 0], [0.1, 0]], "times": [0, 1, 2]}
+    )
+    assert "field 'trajectory.times': 3 times for 2 points" in message
+
+
+# ---------------------------------------------------------------- 5. header names
+@pytest.mark.parametrize("header", ["t,q2,q1", "t,joint2,joint1", "t,q_2,q_1", "time,joint2,q1"])
+def test_csv_columns_are_taken_by_name(tmp_path, header):
+    t, q = rest_samples()
+    reference = urpc.load_samples(write_csv(tmp_path / "a.csv", "t,q1,q2", t, q), 2)
+    swapped = write_csv(tmp_path / "b.csv", header, t, q[:, ::-1])
+    robot = urpc.load_robot("rr_planar")
+    loaded = urpc.load_samples(swapped, 2, robot.joint_names)
+    assert np.array_equal(loaded.q, reference.q)
+
+
+def test_csv_derivative_columns_are_taken_by_name(tmp_path):
+    t = np.linspace(0, 1, 11)
+    q, qd = np.stack([np.sin(t), 2 * t], 1), np.stack([np.cos(t), 2 + 0 * t], 1)
+    table = np.column_stack([t, qd[:, 1], q[:, 1], q[:, 0], qd[:, 0]])
+    path = tmp_path / "d.csv"
+    np.savetxt(path, table, delimiter=",", header="t,qd2,q2,q1,qd1", comments="")
+    loaded = urpc.load_samples(path, 2)
+    assert np.allclose(loaded.q, q) and np.allclose(loaded.evaluate(t)[1], qd, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("header", "expected"),
+    [
+        ("t,q1,q3", "unknown column 'q3' (column 3); valid: t, q1, q2, joint1, joint2, qd1"),
+        ("t,q1,q1", "column 'q1' (column 3) repeats joint 1, already given by 'q1' (column 2)"),
+        ("t,joint1,q1", "column 'q1' (column 3) repeats joint 1, already given by 'joint1'"),
+        ("t,q1,speed", "unknown column 'speed'"),
+        ("t,q1,q2,qd1", "1 qd columns for 2 joints: missing qd2"),
+    ],
+)
+def test_csv_unknown_or_repeated_names_are_refused(tmp_path, header, expected):
+    path = tmp_path / "names.csv"
+    columns = header.count(",") + 1
+    path.write_text(header + "\n" + "\n".join(",".join([str(k)] * columns) for k in range(3)))
+    robot = urpc.load_robot("rr_planar")
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(path, 2, robot.joint_names)
+    assert "names.csv" in str(info.value) and expected in str(info.value)
+
+
+def test_csv_currently_valid_layouts_still_load(tmp_path):
+    t, q = rest_samples()
+    reference = urpc.load_samples(write_csv(tmp_path / "a.csv", "t,q1,q2", t, q), 2).q
+    for header in ("t,q0,q1", "time,q_1,q_2", "t, q1, q2", "t,q 1,q 2"):
+        path = write_csv(tmp_path / "b.csv", header, t, q)
+        assert np.array_equal(urpc.load_samples(path, 2).q, reference), header
+    path = tmp_path / "c.csv"
+    np.savetxt(path, np.column_stack([t, q]), delimiter=",")
+    assert np.array_equal(urpc.load_samples(path, 2).q, reference)
+    assert np.array_equal(urpc.load_samples(path).q, reference)
+
+
+# ---------------------------------------------------------------- 6. ragged rows
+@pytest.mark.parametrize(("row", "count"), [("1,0.1,0.2,9", 4), ("1,0.1", 2)])
+def test_csv_rows_with_too_many_or_too_few_values_name_the_line(tmp_path, row, count):
+    path = tmp_path / "ragged.csv"
+    path.write_text(f"t,q1,q2\n0,0,0\n# a comment\n{row}\n2,0,0\n")
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(path, 2)
+    assert f"ragged.csv: line 4 has {count} values; the header has 3 columns" in str(info.value)
+
+
+def test_csv_value_not_a_number_names_the_line_and_column(tmp_path):
+    path = tmp_path / "text.csv"
+    path.write_text("t,q1,q2\n0,0,0\n1,abc,0\n")
+    with pytest.raises(urpc.InputError, match=r"line 3, column 'q1': 'abc' is not a number"):
+        urpc.load_samples(path, 2)
+
+
+# ---------------------------------------------------------------- 7. times start at 0
+def test_csv_samples_that_do_not_start_at_zero(tmp_path):
+    t, q = rest_samples(start=-5.0)
+    write_csv(tmp_path / "late.csv", "t,q1,q2", t, q)
+    message = refused(tmp_path, {"kind": "file", "path": "late.csv"})
+    assert "late.csv: field 't': the samples start at t = -5 s; a trajectory starts at t = 0" in (
+        message
+    )
+
+
+@pytest.mark.parametrize(("times", "start"), [([5, 6], "5"), ([-1, 1], "-1")])
+def test_waypoint_times_that_do_not_start_at_zero(tmp_path, times, start):
+    message = refused(
+        tmp_path, {"kind": "waypoints", "points": [[0, 0], [0.1, -0.1]], "times": times}
+    )
+    assert (
+        f"field 'trajectory.times': the waypoints start at t = {start} s; a trajectory starts at "
+        "t = 0" in message
+    )
+
+
+# ---------------------------------------------------------------- 8. limits between grid points
+def test_short_waypoint_segment_cannot_hide_its_speed(tmp_path):
+    message = refused(
+        tmp_path, {"kind": "waypoints", "points": [[0, 0], [0.5, -0.3]], "times": [0, 0.001]}
+    )
+    assert "field 'trajectory': the velocity of joint joint1 is 937.5 at t = 0.0005 s" in message
+
+
+def test_short_file_segment_cannot_hide_its_speed(tmp_path):
+    # a quick step between two samples 0.4 ms apart, both off the 1 ms grid
+    t = np.array([0.0, 0.2, 0.4, 0.6, 0.8, 1.0003, 1.0007, 1.2, 1.4, 1.6, 1.8, 2.0])
+    q = np.zeros((len(t), 2))
+    q[6:, 0] = 0.3
+    path = tmp_path / "step.npz"
+    np.savez(path, t=t, q=q, qd=np.zeros_like(q))
+    trajectory = urpc.load_samples(path, 2)
+    peak = np.abs(trajectory.evaluate(np.linspace(1.0003, 1.0007, 2001))[1][:, 0]).max()
+    assert peak > 20  # the rr_planar limit, hidden from a 1 ms grid
+    coarse = np.arange(0, 2.0005, 1e-3)
+    assert np.abs(trajectory.evaluate(coarse)[1][:, 0]).max() < 20
+    with pytest.raises(urpc.InputError, match=r"the velocity of joint joint1 is 1\d\d\d"):
+        check_limits(trajectory, urpc.load_robot("rr_planar"), source=path)
