@@ -62,7 +62,11 @@ def register(commands) -> None:
         "--save-controller",
         metavar="FILE",
         type=Path,
-        help="also save the synthesized controller to FILE",
+        help="also save the controller to FILE, once the robot answers (not overwritten "
+        "without --force)",
+    )
+    p.add_argument(
+        "--force", action="store_true", help="overwrite the --save-controller FILE if it exists"
     )
     p.add_argument(
         "--delay",
@@ -120,7 +124,7 @@ def run_robot(args) -> int:
     import numpy as np
 
     from ..atomic import check_writable, write_files
-    from ..control.controller_file import load_controller
+    from ..control.controller_file import check_controller_path, load_controller, save_controller
     from ..control.synthesis import synthesize
     from ..errors import InputError
     from ..robot.loop import ControlLoop
@@ -134,6 +138,11 @@ def run_robot(args) -> int:
 
     address = parse_address(args.robot_address)
     out = None if args.out is None else check_writable(args.out)
+    save_label = (
+        None if args.save_controller is None else f"--save-controller {args.save_controller}"
+    )
+    if args.save_controller is not None:
+        check_controller_path(args.save_controller, overwrite=args.force, label=save_label)
     scenario = load_scenario(args.scenario)
     if args.duration is not None:
         scenario = scenario.with_overrides(duration=args.duration)
@@ -146,10 +155,15 @@ def run_robot(args) -> int:
     setup = build(scenario)
     if args.controller is not None:
         controller = load_controller(args.controller)
-        if controller.robot.dof != setup.robot.dof:
+        if controller.robot.dof != setup.robot.dof or tuple(controller.robot.joint_names) != tuple(
+            setup.robot.joint_names
+        ):
             raise InputError(
-                f"the controller is for {controller.robot.name}, not {setup.robot.name}",
+                f"the controller is for {_arm(controller.robot)}, but the scenario runs "
+                f"{_arm(setup.robot)}; save a controller for the scenario's robot and locked "
+                "joints",
                 args.controller,
+                "robot",
             )
         # a saved law's delay is fixed: a different one asked for (--delay, or the scenario's
         # controller_options.interval.delay) would otherwise be dropped without a word
@@ -171,8 +185,6 @@ def run_robot(args) -> int:
         if args.sampled_law is not None:
             options["sampled_law"] = args.sampled_law
         controller = synthesize(setup.robot, setup.box, scenario.epsilon, **options)
-    if args.save_controller is not None:
-        controller.save(args.save_controller)
     declared = scenario.actuation_delay  # the robot's own delay, as the scenario states it
     if declared is not None and declared != controller.delay:
         print(
@@ -212,6 +224,14 @@ def run_robot(args) -> int:
             "(urpc virtual-robot ROBOT --port P)",
             field="robot-address",
         )
+    if args.save_controller is not None:  # every input checked, the robot answers: save
+        try:
+            save_controller(
+                controller, args.save_controller, overwrite=args.force, label=save_label
+            )
+        except BaseException:
+            robot.stop()
+            raise
     trajectory, approach = setup.trajectory, 0.0
     start = trajectory.reference(0.0).q
     distance = float(np.linalg.norm(first.q - start))
@@ -278,6 +298,14 @@ def run_robot(args) -> int:
         print(f"error: run stopped: {report.message}", file=sys.stderr)
         return EXIT_STOPPED
     return EXIT_OK
+
+
+def _arm(robot) -> str:
+    """``rr_planar with 1 joint (joint2; locked: joint1)``: a robot and its locked joints."""
+    dof = robot.dof
+    locked = ", ".join(robot.locked_joints) or "none"
+    joints = ", ".join(robot.joint_names)
+    return f"{robot.name} with {dof} joint{'s' if dof != 1 else ''} ({joints}; locked: {locked})"
 
 
 def _print_summary(s: dict) -> None:

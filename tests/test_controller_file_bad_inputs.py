@@ -1,0 +1,214 @@
+"""Bad controller files and bad ``--save-controller`` paths: one InputError (the CLI: one
+``error:`` line, exit 2) naming the file and the field, no traceback, nothing left behind."""
+
+import json
+import os
+
+import pytest
+
+import urpc
+from urpc.cli import main
+
+_CACHE: dict = {}
+
+
+def _saved(tmp_path, locked=()):
+    """A controller of the RR arm at 1 kHz (``locked``: joints locked at 0), saved in tmp_path."""
+    key = tuple(locked)
+    if key not in _CACHE:
+        robot = urpc.load_robot("rr_planar", {name: 0.0 for name in locked})
+        box = urpc.load_uncertainty("rr_planar", robot)
+        _CACHE[key] = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
+    return _CACHE[key].save(tmp_path / "c.json")
+
+
+def _edited(tmp_path, edit):
+    path = _saved(tmp_path)
+    document = json.loads(path.read_text())
+    edit(document)
+    path.write_text(json.dumps(document))
+    return path
+
+
+def _set(section, field, value):
+    return lambda d: d[section].__setitem__(field, value)
+
+
+def _drop(section, field):
+    return lambda d: d[section].pop(field)
+
+
+CASES = {
+    "box_a_list": (lambda d: d.__setitem__("box", []), "field 'box'", "not an object"),
+    "box_without_document": (_drop("box", "document"), "field 'box.document'", "missing"),
+    "law_a_number": (lambda d: d.__setitem__("law", 5), "field 'law'", "not an object"),
+    "Kr_text": (
+        _set("law", "Kr", "thirty"),
+        "field 'law.Kr'",
+        "'thirty' is not a number or list of numbers",
+    ),
+    "check_null": (lambda d: d.__setitem__("check", None), "field 'check'", "null"),
+    "check_without_joint_parameters": (
+        _drop("check", "joint_parameters"),
+        "field 'check.joint_parameters'",
+        "missing",
+    ),
+    "nominal_parameters_text": (
+        _set("check", "nominal_parameters", ["a"]),
+        "field 'check.nominal_parameters'",
+        "not a list of numbers",
+    ),
+    "locked_joints_a_list": (
+        _set("robot", "locked_joints", ["joint1"]),
+        "field 'robot.locked_joints'",
+        "not an object mapping joint names",
+    ),
+    "locked_joints_text": (
+        _set("robot", "locked_joints", "joint1"),
+        "field 'robot.locked_joints'",
+        "not an object mapping joint names",
+    ),
+    "locked_joint_unknown": (
+        _set("robot", "locked_joints", {"jointX": 0.0}),
+        "field 'robot.locked_joints'",
+        "valid: joint1, joint2",
+    ),
+    "urdf_a_number": (_set("robot", "urdf", 5), "field 'robot.urdf'", "5 is not a text"),
+    "robot_missing": (lambda d: d.pop("robot"), "field 'robot'", "missing"),
+    "bad_law_value": (_set("law", "epsilon", -1.0), "field 'law.epsilon'", "> 0"),
+    "bad_law_method": (_set("law", "method", "nope"), "field 'law.method'", "valid: "),
+    "bad_embedded_box": (
+        lambda d: d["box"]["document"]["links"]["link2"].__setitem__("mass", [10, 5]),
+        "field 'box.document.links.link2.mass'",
+        "embedded copy",
+    ),
+    "continuous_time": (
+        _set("law", "sample_period", None),
+        "field 'law.sample_period'",
+        "continuous-time",
+    ),
+    "ragged_joint_parameters": (
+        _set("check", "joint_parameters", [[0.0, 0.0], [0.0]]),
+        "field 'check'",
+        "synthesize and save it again",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_a_malformed_controller_file_names_the_file_and_the_field(case, tmp_path):
+    edit, field, words = CASES[case]
+    path = _edited(tmp_path, edit)
+    with pytest.raises(urpc.InputError) as caught:
+        urpc.load_controller(path)
+    message = str(caught.value)
+    assert message.startswith(f"{path}: {field}:"), message
+    assert words in message and "\n" not in message
+    assert "uncertainty.yaml:" not in message  # the controller file, not the box's source
+
+
+def test_a_continuous_time_controller_is_not_saved(tmp_path):
+    robot = urpc.load_robot("rr_planar")
+    controller = urpc.synthesize(robot, urpc.load_uncertainty("rr_planar", robot), 1e-2)
+    with pytest.raises(urpc.InputError, match="field 'sample_period'.*continuous-time"):
+        controller.save(tmp_path / "c.json")
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize(
+    "where, words",
+    [
+        ("adir", "is a folder; give a file name such as arm.json"),
+        ("afile/c.json", "is a file, not a folder"),
+    ],
+)
+def test_save_refuses_a_folder_or_a_path_under_a_file(where, words, tmp_path):
+    (tmp_path / "adir").mkdir()
+    (tmp_path / "afile").write_text("x")
+    robot = urpc.load_robot("rr_planar")
+    box = urpc.load_uncertainty("rr_planar", robot)
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
+    with pytest.raises(urpc.InputError, match=words):
+        controller.save(tmp_path / where)
+    assert sorted(os.listdir(tmp_path)) == ["adir", "afile"]
+    assert os.listdir(tmp_path / "adir") == []
+
+
+def _cli(capsys, *argv):
+    code = main(list(argv))
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.startswith("error:")]
+    return code, err, lines
+
+
+@pytest.mark.parametrize(
+    "where, words",
+    [
+        ("adir", "--save-controller {}: is a folder; give a file name such as arm.json"),
+        ("nodir/c.json", "--save-controller {}: the folder"),
+        ("afile/c.json", "--save-controller {}: "),
+        ("old.json", "--save-controller {}: the file exists; give --force"),
+    ],
+)
+def test_run_checks_the_save_controller_path_first(where, words, tmp_path, capsys, monkeypatch):
+    (tmp_path / "adir").mkdir()
+    (tmp_path / "afile").write_text("x")
+    (tmp_path / "old.json").write_text("old")
+    monkeypatch.chdir(tmp_path)
+
+    def synthesis_must_not_run(*args, **kwargs):
+        raise AssertionError("synthesized before the path was checked")
+
+    monkeypatch.setattr("urpc.control.synthesis.synthesize", synthesis_must_not_run)
+    code, err, lines = _cli(
+        capsys,
+        "run",
+        "rr_planar/s3_ic1",
+        "--robot-address",
+        "udp://127.0.0.1:9",
+        "--save-controller",
+        where,
+    )
+    assert code == 2 and "Traceback" not in err
+    assert len(lines) == 1 and words.format(where) in lines[0], err
+    assert (tmp_path / "old.json").read_text() == "old"
+    assert sorted(os.listdir(tmp_path)) == ["adir", "afile", "old.json"]
+
+
+def test_run_saves_no_controller_when_it_fails_on_bad_input(tmp_path, capsys):
+    """No robot answers (exit 2 after 5 s): the controller file is not written."""
+    target = tmp_path / "c.json"
+    code, err, lines = _cli(
+        capsys,
+        "run",
+        "rr_planar/s3_ic1",
+        "--robot-address",
+        "udp://127.0.0.1:9",
+        "--save-controller",
+        str(target),
+    )
+    assert code == 2 and "Traceback" not in err
+    assert len(lines) == 1 and "no state from the robot" in lines[0]
+    assert not target.exists() and os.listdir(tmp_path) == []
+
+
+def test_run_refuses_a_continuous_time_controller_file(tmp_path, capsys):
+    path = _edited(tmp_path, _set("law", "sample_period", None))
+    code, err, lines = _cli(
+        capsys, "run", "rr_planar/s3_ic1", "--robot-address", "udp://127.0.0.1:9",
+        "--controller", str(path),
+    )  # fmt: skip
+    assert code == 2 and "Traceback" not in err and len(lines) == 1
+    assert "field 'law.sample_period'" in lines[0] and "continuous-time" in lines[0]
+
+
+def test_run_names_the_joints_of_a_controller_for_other_locked_joints(tmp_path, capsys):
+    path = _saved(tmp_path, locked=["joint1"])
+    code, err, lines = _cli(
+        capsys, "run", "rr_planar/s3_ic1", "--robot-address", "udp://127.0.0.1:9",
+        "--controller", str(path),
+    )  # fmt: skip
+    assert code == 2 and "Traceback" not in err and len(lines) == 1
+    message = lines[0]
+    assert "rr_planar with 1 joint (joint2; locked: joint1)" in message, message
+    assert "rr_planar with 2 joints (joint1, joint2; locked: none)" in message, message
