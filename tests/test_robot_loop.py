@@ -97,6 +97,34 @@ def test_nan_state_stops_the_loop_with_one_message(rr):
     assert layer.counts["non_finite_state"] == 1 and arm.braked
 
 
+@pytest.mark.parametrize("controller_period", [1e-4, 2e-3])
+def test_a_controller_for_another_period_than_the_robots_is_stopped(rr, controller_period):
+    """A 10 kHz (or 500 Hz) law on a 1 kHz arm: after 50 samples the robot's period, from its
+    states' times, is compared with the law's; the run stops with the safe command and says
+    both periods."""
+    robot, box = rr
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=controller_period)
+    clock = FakeClock()
+    arm = VirtualArm(box.plant(robot, box.vertex(0)), 1e-3, ArmOptions())
+    loop = ControlLoop(controller, urpc.PaperTrajectory())
+    layer = SafetyLayer.for_robot(robot, controller_period)
+    watchdog = Watchdog(controller_period, late_budget=10**6, deadline=1.0)
+    report = run(LockstepRobot(arm, clock), loop, layer, watchdog, 1.0, clock=clock)
+    assert report.ending == "fault" and report.cycles == 50, report
+    assert "the robot's period is 1 ms" in report.message
+    assert f"the controller's {controller_period * 1e3:g} ms" in report.message
+
+
+def test_a_controller_for_the_robots_period_is_not_stopped_by_the_period_check(rr):
+    report, _, _ = lockstep(*_vertex_plant_controller(rr), rr[0], 0.2)
+    assert report.ending == "completed", report
+
+
+def _vertex_plant_controller(rr):
+    robot, box = rr
+    return box.plant(robot, box.vertex(0)), urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
+
+
 def test_delayed_law_state_and_save(rr, tmp_path):
     robot, box = rr
     controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3, delay=1)

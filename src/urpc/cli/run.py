@@ -281,8 +281,11 @@ def run_robot(args) -> int:
             info={"run": report.to_dict(), "approach_s": approach},
         )
         metrics = result.metrics
+        # A run cut short is not judged: "met" needs the whole run.
         summary.update(
-            met=metrics["met"], final_error=metrics["final_error"], epsilon=scenario.epsilon
+            met=bool(metrics["met"]) and report.ok,
+            final_error=metrics["final_error"],
+            epsilon=scenario.epsilon,
         )
     if out is not None and result is not None:
         writers = result.writers()
@@ -311,8 +314,13 @@ def _arm(robot) -> str:
 def _print_summary(s: dict) -> None:
     lines = [f"{s['scenario']} on {s['robot_address']}: {s['ending']}"]
     if "met" in s:
+        verdict = (
+            ("yes" if s["met"] else "NO")
+            if s["ending"] == "completed"
+            else "not judged (the run stopped early)"
+        )
         lines.append(
-            f"  met          {'yes' if s['met'] else 'NO'}: final error {s['final_error']:.4g} rad "
+            f"  met          {verdict}: final error {s['final_error']:.4g} rad "
             f"(epsilon {s['epsilon']:g})"
         )
     if s["approach_s"]:

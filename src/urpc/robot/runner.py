@@ -108,6 +108,7 @@ def run(
         last_qd = state.qd
         last_seq = state.seq
         index = 0  # samples from the first one to last_seq (unwrapped)
+        first_t, period_checked = state.t, False
         ending, message = "completed", None
         while watchdog.cycles < cycles_wanted:
             if state is None:
@@ -128,6 +129,13 @@ def run(
                 state = robot.read_state(read_timeout)
                 continue
             last_seq, index = state.seq, index + gap
+            if index >= PERIOD_CHECK_SAMPLES and not period_checked:
+                period_checked = True
+                mismatch = _period_mismatch(state.t - first_t, index, period)
+                if mismatch is not None:
+                    _send_safe(robot, safety, state.seq, state.qd)
+                    ending, message = "fault", mismatch
+                    break
             fault = safety.check_state(t, state.q, state.qd)
             if fault is not None:
                 _send_safe(robot, safety, state.seq, state.qd)
@@ -153,6 +161,28 @@ def run(
         return _report(ending, message, watchdog.cycles, clock() - start, safety, watchdog)
     finally:
         robot.stop()
+
+
+#: After this many samples the robot's period (from its states' times) is compared with the
+#: loop's; a ratio outside PERIOD_TOLERANCE stops the run (a 10 kHz law on a 1 kHz arm).
+PERIOD_CHECK_SAMPLES = 50
+PERIOD_TOLERANCE = (0.9, 1.1)
+
+
+def _period_mismatch(elapsed: float, samples: int, period: float) -> str | None:
+    """What to say when ``samples`` robot periods took ``elapsed`` [s] of the robot's time and
+    that is not ``samples`` loop periods (``None`` when it is, or the times say nothing)."""
+    if not (math.isfinite(elapsed) and elapsed > 0):
+        return None
+    robot_period = elapsed / samples
+    low, high = PERIOD_TOLERANCE
+    if low <= robot_period / period <= high:
+        return None
+    return (
+        f"the robot's period is {robot_period * 1e3:.4g} ms (the times of its states), the "
+        f"controller's {period * 1e3:.4g} ms: synthesize the controller for the robot's period "
+        "(the scenario's sample_period); safe command sent, run stopped"
+    )
 
 
 def _send_safe(robot: RobotInterface, safety: SafetyLayer, seq: int, qd: np.ndarray) -> None:
