@@ -53,3 +53,19 @@ def test_addresses_are_loopback_only():
     for bad in ("udp://10.0.0.2:5000", "tcp://127.0.0.1:5000", "udp://127.0.0.1"):
         with pytest.raises(InputError):
             parse_address(bad)
+
+
+@pytest.mark.parametrize(
+    "bad, words",
+    [
+        ("udp://", "gives no host and port"),
+        ("udp://127.0.0.1:99999", "PORT 1-65535"),
+        ("udp://localhost:5000/path", "has a path"),
+        ("udp://127.0.0.1:5000?x=1", "has a query"),
+        ("udp://user@127.0.0.1:5000", "has a user"),
+    ],
+)
+def test_an_address_with_parts_a_robot_does_not_take_says_which(bad, words):
+    with pytest.raises(InputError, match="robot-address") as caught:
+        parse_address(bad)
+    assert words in str(caught.value)

@@ -27,9 +27,26 @@ def parse_address(text: str, field: str = "robot-address") -> tuple[str, int]:
         InputError: another scheme, a host that is not the loopback, a missing or bad port.
     """
     parts = urlsplit(text)
-    expected = "expected udp://127.0.0.1:PORT (loopback only)"
+    expected = "expected udp://127.0.0.1:PORT (loopback only, PORT 1-65535)"
     if parts.scheme != "udp":
         raise InputError(f"{text!r} is not a udp:// address; {expected}", field=field)
+    if not parts.netloc:
+        raise InputError(f"{text!r} gives no host and port; {expected}", field=field)
+    extra = [
+        name
+        for name, value in (
+            ("a path", parts.path),
+            ("a query", parts.query),
+            ("a fragment", parts.fragment),
+            ("a user", parts.username),
+        )
+        if value
+    ]
+    if extra:
+        raise InputError(
+            f"{text!r} has {' and '.join(extra)}, which a robot address does not take; {expected}",
+            field=field,
+        )
     if parts.hostname not in ("127.0.0.1", "localhost"):
         raise InputError(f"host {parts.hostname!r} is not the loopback; {expected}", field=field)
     try:
