@@ -49,6 +49,10 @@ def _fraction(text: str) -> float:
     return value
 
 
+#: The shortest robot period [s] the wall-clock virtual robot accepts (10 kHz).
+MIN_PERIOD = 1e-4
+
+
 def register(commands) -> None:
     p = add_command(
         commands,
@@ -162,6 +166,8 @@ def register(commands) -> None:
 
 
 def run_virtual_robot(args) -> int:
+    import numpy as np
+
     from ..errors import InputError
     from ..model.catalog import default_uncertainty
     from ..model.robot import load_robot
@@ -199,6 +205,29 @@ def run_virtual_robot(args) -> int:
     plant = box.plant(robot, point)
     if args.q0 is not None and len(args.q0) != robot.dof:
         raise InputError(f"{len(args.q0)} values; the robot has {robot.dof} joints", field="q0")
+    if args.q0 is not None:
+        lower, upper = robot.position_limits
+        q0 = np.asarray(args.q0, dtype=float)
+        outside = np.flatnonzero((q0 < lower) | (q0 > upper))
+        if len(outside):
+            j = int(outside[0])
+            raise InputError(
+                f"joint {robot.joint_names[j]} starts at {q0[j]:g}, outside its limits "
+                f"[{lower[j]:g}, {upper[j]:g}] (the URDF's)",
+                field="q0",
+            )
+    if args.period < MIN_PERIOD:
+        raise InputError(
+            f"{args.period:g} s is faster than a wall-clock robot process can keep; give at "
+            f"least {MIN_PERIOD:g} s (10 kHz)",
+            field="period",
+        )
+    if args.watchdog_ms * 1e-3 < 2 * args.period:
+        raise InputError(
+            f"{args.watchdog_ms:g} ms is less than two periods ({2e3 * args.period:g} ms): the "
+            "arm would brake between two torques; give at least two periods",
+            field="watchdog-ms",
+        )
     options = ArmOptions(
         delay=args.delay,
         encoder_resolution=args.encoder_resolution,
