@@ -399,3 +399,16 @@ def test_run_refuses_a_saved_controller_whose_delay_is_not_the_one_asked_for(
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1, err
     assert "predicts over 0 sample(s)" in err and "not the 1 asked for" in err and "delay" in err
+
+
+def test_run_refuses_a_saved_controller_whose_law_is_not_the_one_asked_for(tmp_path, capsys):
+    """``--sampled-law paper`` with a saved implicit-law controller: one error naming the field,
+    before any robot is contacted, instead of running the saved law silently."""
+    from urpc.__main__ import main
+
+    saved = _interval(delay=0).save(tmp_path / "controller.json")
+    argv = ["run", "rr_planar/s3_ic1", "--robot-address", "udp://127.0.0.1:9"]
+    assert main([*argv, "--controller", str(saved), "--sampled-law", "paper"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1, err
+    assert "runs the implicit law, not the paper one" in err and "sampled_law" in err

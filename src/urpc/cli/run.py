@@ -178,6 +178,14 @@ def run_robot(args) -> int:
                 args.controller,
                 "delay",
             )
+        law = getattr(controller, "sampled_law", None)
+        if args.sampled_law is not None and args.sampled_law != law:
+            raise InputError(
+                f"the saved controller runs the {law} law, not the {args.sampled_law} one asked "
+                f"for (--sampled-law); synthesize it again with that law, or drop --sampled-law",
+                args.controller,
+                "sampled_law",
+            )
     else:
         options = interval_synthesis_options(scenario)
         if args.delay is not None:
