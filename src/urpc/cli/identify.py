@@ -206,11 +206,32 @@ def run_identify(args) -> int:
     return EXIT_OK
 
 
+#: An exciting trajectory is written with at least this many samples per period of its highest
+#: harmonic (a trajectory file is read back as a spline through them).
+EXCITE_SAMPLES_PER_PERIOD = 10
+
+
 def _excite(args, robot, out: Path, write_new_file) -> int:
     import numpy as np
 
+    from ..errors import InputError
     from ..identify.data import write_csv
     from ..identify.excitation import excite
+
+    if out.suffix.lower() != ".csv":
+        raise InputError(
+            f"{out.name}: an exciting trajectory is written as CSV, which a scenario's "
+            "'trajectory: {kind: file}' reads by its suffix; give a name ending in .csv",
+            field="--out",
+        )
+    highest = args.harmonics * args.frequency  # [Hz]
+    if args.rate < EXCITE_SAMPLES_PER_PERIOD * highest:
+        raise InputError(
+            f"{args.rate:g} Hz gives fewer than {EXCITE_SAMPLES_PER_PERIOD} samples per period of "
+            f"the highest harmonic ({args.harmonics} x {args.frequency:g} Hz = {highest:g} Hz): "
+            f"give --rate {EXCITE_SAMPLES_PER_PERIOD * highest:g} or more, or a lower --frequency",
+            field="--rate",
+        )
 
     result = excite(
         robot,
