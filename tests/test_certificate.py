@@ -497,3 +497,19 @@ def test_a_reference_that_needs_more_than_the_effort_limits_is_not_certified(rr,
     paper = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
     held = next(c for c in paper.conditions if c.name == condition.name)
     assert held.holds and 0.3 < held.value < 0.5
+
+
+def test_an_absurd_epsilon_blames_the_tube_without_numpy_warnings(rr, rr_box):
+    """epsilon = 1e300 rad: the inertia bounds fail over the tube, not for the box's sake; the
+    report says to lower epsilon, and the overflow inside the enclosures (inf quantities that fail
+    their conditions) raises no numpy warning."""
+    import warnings
+
+    controller = urpc.synthesize(rr, rr_box, 1e300, sample_period=1e-3, Kr=30.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        certificate = certify(controller, PaperTrajectory(), duration=2.0, disturbance_bound=1.0)
+    assert not certificate.certified
+    failed = certificate.failed[0]
+    assert failed.name == "inertia lower bound M_L positive definite"
+    assert "over the tube" in failed.explanation and "lower epsilon" in failed.explanation

@@ -210,7 +210,10 @@ def certify(
     except NotImplementedError as exc:
         raise InputError(str(exc), field="trajectory") from None
     law = controller.feedback
-    argument = law.argument(controller, floor_of, d, progress)
+    # Overflow and nan in an enclosure (a tube of 1e300 rad, a vacuous box) come out as inf or nan
+    # quantities, which fail their conditions; numpy's warnings about them would only be noise.
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        argument = law.argument(controller, floor_of, d, progress)
     conditions += argument.conditions
     reference = reference_torque(controller, trajectory, floor_of.span)
     if reference is not None:

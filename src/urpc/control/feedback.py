@@ -226,13 +226,21 @@ def _sampled_conditions(
         + (f" the period to {max_period:.3g} s" if max_period > 0
            else " the period: none up to twice this one is certified")
     )  # fmt: skip
+    # Bounds that fail for the tube's sake (the inertia moves more over ||e|| <= epsilon than
+    # they allow) are not the box's fault alone: say so.
+    tube = (
+        f"the inertia changes more over the tube ||e|| <= {epsilon:g} rad than the bounds "
+        "allow: lower epsilon, or narrow the mass/inertia intervals"
+        if figures.get("invalid_for_tube")
+        else None
+    )
     specs = [
         ("inertia lower bound M_L positive definite", figures["lambda_L"] > 0,
          figures["lambda_L"], 0.0,
-         "the box allows a joint with no inertia: narrow the mass/inertia intervals",
+         tube or "the box allows a joint with no inertia: narrow the mass/inertia intervals",
          "every plant of the box has an inertia of at least lambda_L along every mode"),
         ("relative inertia bound beta > 0", figures["beta"] > 0, figures["beta"], 0.0,
-         "the box's inertia bounds are vacuous: narrow the mass/inertia intervals",
+         tube or "the box's inertia bounds are vacuous: narrow the mass/inertia intervals",
          "the law's inertia model is at least beta times every plant's"),
         ("contraction a exceeds the perturbation b (at r = 0)", margin > 0, margin, 0.0,
          "shorten the sample period or lower Kr (b grows with T Kr and T |qd|)",
