@@ -185,6 +185,7 @@ CASES: dict[str, Case] = {
     "virtual_robot_watchdog_shorter_than_two_periods": Case({}, ["virtual-robot", "rr_planar", "--port", "0", "--wait", "1", "--watchdog-ms", "0.001"], None, ("field 'watchdog-ms'", "less than two periods"), names_file=""),
     "identify_excite_rate_below_ten_samples_per_harmonic": Case({}, ["identify", "rr_planar", "--excite", "--out", "{tmp}/ex.csv", "--rate", "1e-3"], None, ("field '--rate'", "fewer than 10 samples"), names_file=""),
     "identify_excite_out_not_csv": Case({}, ["identify", "rr_planar", "--excite", "--out", "{tmp}/ex.txt"], None, ("field '--out'", "ending in .csv"), names_file=""),
+    "simulate_torque_limit_override_names_the_command_line": Case({}, ["simulate", "rr_planar/s3_ic1", "--torque-limit", "1,2,3", "--no-certify"], None, ("command-line override", "field 'torque_limit'", "3 entries"), names_file=""),
     "simulate_out_unwritable_for_root_too": Case({}, ["simulate", "rr_planar/s3_ic1", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
     "campaign_out_unwritable_for_root_too": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "2", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
     "campaign_neither_scenario_nor_robot": Case({}, ["campaign", "--runs", "2"], None, ("give a scenario file", "--robot"), names_file=""),

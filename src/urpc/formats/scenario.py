@@ -243,6 +243,9 @@ class Scenario(FileFormat):
     frozen, with paths made absolute."""
 
     _source: Path | None = PrivateAttr(None)
+    #: The fields :meth:`with_overrides` replaced (their errors name the command line, not the
+    #: file).
+    _overridden: frozenset[str] = PrivateAttr(frozenset())
 
     name: Annotated[Text | None, AfterValidator(_default_name)] = Field(
         None, validate_default=True, description="default: the file name without .yaml"
@@ -365,9 +368,17 @@ class Scenario(FileFormat):
                 update["controller_options"]
             )
         try:
-            return self.model_copy(update=update)._consistent()
+            copy = self.model_copy(update=update)._consistent()
         except FieldError as exc:
             raise InputError(str(exc), OVERRIDE_SOURCE, exc.path[0]) from None
+        copy._overridden = self._overridden | frozenset(update)
+        return copy
+
+    def source_of(self, field: str):
+        """Where ``field``'s value came from: :data:`OVERRIDE_SOURCE` for a field
+        :meth:`with_overrides` replaced, else the scenario's file (``None`` when built in
+        code)."""
+        return OVERRIDE_SOURCE if field in self._overridden else self.source
 
     def to_dict(self) -> dict[str, Any]:
         """Plain data (YAML/JSON-ready) with every key of the scenario file; paths absolute."""

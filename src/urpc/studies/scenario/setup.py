@@ -121,7 +121,13 @@ def build(scenario: Scenario) -> ScenarioSetup:
     limit = None
     if scenario.torque_limit is not None:
         limit = np.broadcast_to(
-            _fit(scenario.torque_limit, nominal.dof, source, "torque_limit"), (nominal.dof,)
+            _fit(
+                scenario.torque_limit,
+                nominal.dof,
+                scenario.source_of("torque_limit"),
+                "torque_limit",
+            ),
+            (nominal.dof,),
         ).copy()
     setup = ScenarioSetup(
         scenario, nominal, box, plant, point, description, trajectory, q0, qd0, limit
