@@ -186,6 +186,7 @@ CASES: dict[str, Case] = {
     "identify_excite_rate_below_ten_samples_per_harmonic": Case({}, ["identify", "rr_planar", "--excite", "--out", "{tmp}/ex.csv", "--rate", "1e-3"], None, ("field '--rate'", "fewer than 10 samples"), names_file=""),
     "identify_excite_out_not_csv": Case({}, ["identify", "rr_planar", "--excite", "--out", "{tmp}/ex.txt"], None, ("field '--out'", "ending in .csv"), names_file=""),
     "simulate_torque_limit_override_names_the_command_line": Case({}, ["simulate", "rr_planar/s3_ic1", "--torque-limit", "1,2,3", "--no-certify"], None, ("command-line override", "field 'torque_limit'", "3 entries"), names_file=""),
+    "init_options_give_a_box_out_of_range": Case({}, ["init", "rr_planar", "--out", "{tmp}/b.yaml", "--com", "1e300"], None, ("--mass, --com, --inertia and --payload", "was not written"), names_file=""),
     "simulate_out_unwritable_for_root_too": Case({}, ["simulate", "rr_planar/s3_ic1", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
     "campaign_out_unwritable_for_root_too": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "2", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
     "campaign_neither_scenario_nor_robot": Case({}, ["campaign", "--runs", "2"], None, ("give a scenario file", "--robot"), names_file=""),

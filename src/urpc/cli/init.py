@@ -133,7 +133,14 @@ def run_init(args) -> int:
     )
     import yaml
 
-    box = parse_uncertainty(yaml.safe_load(text), robot, source=str(out))  # what check will read
+    try:  # what check will read
+        box = parse_uncertainty(yaml.safe_load(text), robot, source=str(out))
+    except InputError as exc:  # the box the options give is refused: name them, write nothing
+        raise InputError(
+            f"the box that --mass, --com, --inertia and --payload give is refused ({exc.detail}); "
+            f"{out} was not written",
+            field=exc.field,
+        ) from None
     write_new_file(out, text, overwrite=args.force)
     templates = link_templates(robot, settings)
     summary = {
