@@ -283,6 +283,26 @@ def read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
                 field=f"joint.{joint.get('name')}.limit",
             )
         limit = joint.find("limit")
+        name = joint.get("name")
+        axis = joint.find("axis")
+        if kind in ("revolute", "continuous", "prismatic") and axis is not None:
+            if not any(float(x) for x in axis.get("xyz", "1 0 0").split()):
+                raise InputError(
+                    f"joint '{name}' has the axis xyz=\"{axis.get('xyz')}\": a {kind} joint "
+                    'needs a non-zero axis (a unit vector, e.g. xyz="0 0 1")',
+                    source=path,
+                    field=f"joint.{name}.axis.xyz",
+                )
+        if limit is not None and kind != "fixed":
+            for attribute in ("effort", "velocity"):
+                value = limit.get(attribute)
+                if value is not None and float(value) < 0:
+                    raise InputError(
+                        f"joint '{name}' has a negative {attribute} limit ({float(value):g}); "
+                        f"the {attribute} limit is a bound >= 0",
+                        source=path,
+                        field=f"joint.{name}.limit.{attribute}",
+                    )
         if kind in ("revolute", "prismatic"):
             lower, upper = (float(limit.get(end, "0")) for end in ("lower", "upper"))
             if lower > upper:
