@@ -51,3 +51,30 @@ def test_a_changed_urdf_or_version_is_refused(tmp_path):
     path.write_text(json.dumps(document))
     with pytest.raises(urpc.InputError, match="version 99"):
         urpc.load_controller(path)
+
+
+def test_a_loaded_controller_saves_again_from_its_embedded_box(tmp_path):
+    """Saved, loaded, the box file deleted, saved again: the second file embeds the same box
+    (not the file, which is gone) and its controller gives the first's torque bit for bit; a box
+    parsed from a document in code saves too."""
+    robot = urpc.load_robot("rr_planar")
+    shutil.copy(urpc.load_uncertainty("rr_planar", robot).source, tmp_path / "box.yaml")
+    box = urpc.load_uncertainty(tmp_path / "box.yaml", robot)
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
+    first = urpc.load_controller(controller.save(tmp_path / "first.json"))
+    (tmp_path / "box.yaml").unlink()
+    second = urpc.load_controller(first.save(tmp_path / "second.json"))
+    documents = [
+        json.loads((tmp_path / f"{n}.json").read_text())["box"] for n in ("first", "second")
+    ]
+    assert documents[0] == documents[1]
+    reference = urpc.PaperTrajectory().reference(0.5)
+    q, qd = reference.q + 0.01, reference.qd - 0.1
+    state = controller.initial_state()
+    assert np.array_equal(
+        controller.output(0.5, q, qd, reference, state), second.output(0.5, q, qd, reference, state)
+    )
+    parsed = urpc.parse_uncertainty({"links": {"link2": {"mass": "10%"}}}, robot)
+    in_code = urpc.synthesize(robot, parsed, 1e-2, sample_period=1e-3)
+    loaded = urpc.load_controller(in_code.save(tmp_path / "in_code.json"))
+    assert loaded.bound.box.source is None

@@ -59,10 +59,10 @@ def save_controller(
             field="controller",
         )
     box = controller.bound.box
-    if box.source is None or not Path(box.source).is_file():
+    if box.document is None and (box.source is None or not Path(box.source).is_file()):
         raise InputError(
-            "the controller's box was not read from a file (load_uncertainty); build it from one "
-            "to save the controller",
+            "the controller's box was not read from a file or a document (load_uncertainty, "
+            "parse_uncertainty); build it from one to save the controller",
             field="box",
         )
     if controller.sample_period is None:
@@ -74,7 +74,11 @@ def save_controller(
     robot = controller.robot
     import yaml
 
-    document = yaml.safe_load(Path(box.source).read_text())
+    # The document the box was parsed from (a loaded controller's embedded copy included);
+    # a box without one (built otherwise) is read back from its file.
+    document = (
+        box.document if box.document is not None else yaml.safe_load(Path(box.source).read_text())
+    )
     payload: dict[str, Any] = {
         "format": FORMAT,
         "version": VERSION,
@@ -84,7 +88,10 @@ def save_controller(
             "urdf_sha256": _sha256(robot.urdf_path),
             "locked_joints": dict(robot.locked_joints),
         },
-        "box": {"source": str(Path(box.source).resolve()), "document": document},
+        "box": {
+            "source": None if box.source is None else str(Path(box.source).resolve()),
+            "document": document,
+        },
         "law": {
             "epsilon": controller.epsilon,
             "method": controller.method,

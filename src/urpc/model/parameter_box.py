@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import pinocchio as pin
@@ -145,6 +145,9 @@ class ParameterBox:
             (its URDF's ``<dynamics>``) are exact.
         robot: The robot the box was parsed for (``None`` for a box built by hand), so that
             ``box.plant(point)`` needs no robot.
+        document: The parsed uncertainty document the box was built from (``None`` for a box
+            built by hand): what a saved controller embeds (:meth:`IntervalPassivityController.
+            save`), so that saving needs neither the file nor its unchanged contents.
     """
 
     links: tuple[LinkBox, ...]
@@ -154,6 +157,7 @@ class ParameterBox:
     robot_name: str | None = field(default=None, compare=False)
     joints: JointBox | None = None
     robot: Robot | None = field(default=None, compare=False, repr=False)
+    document: Any = field(default=None, compare=False, repr=False)
 
     def joint_box(self, robot: Robot) -> JointBox:
         """The joint box, or the exact one of ``robot``'s own joint parameters."""

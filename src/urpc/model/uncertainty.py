@@ -25,6 +25,7 @@ robot (link names, URDF nominal values, physical consistency). The box values li
 
 from __future__ import annotations
 
+import copy
 import warnings
 from pathlib import Path
 from typing import Any
@@ -157,6 +158,7 @@ def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) ->
         robot_name=robot.name,
         joints=resolve_joint_box(spec.joints, robot, source) if spec.joints else None,
         robot=robot,
+        document=copy.deepcopy(document),
     )
 
 
