@@ -212,3 +212,89 @@ def test_run_names_the_joints_of_a_controller_for_other_locked_joints(tmp_path, 
     message = lines[0]
     assert "rr_planar with 1 joint (joint2; locked: joint1)" in message, message
     assert "rr_planar with 2 joints (joint1, joint2; locked: none)" in message, message
+
+
+def _scenario(tmp_path, edit):
+    """The RR arm's scenario 3 (1 kHz) written to tmp_path after ``edit(data)``, its box file
+    copied beside it (edited too when ``edit`` returns a new box document)."""
+    import yaml
+
+    from urpc.studies.scenario import load_scenario
+
+    source = load_scenario("rr_planar/s3_ic1").source
+    data = yaml.safe_load(open(source))
+    root = os.path.dirname(source)
+    box = yaml.safe_load(open(os.path.join(root, data["uncertainty"])))
+    data["uncertainty"] = "box.yaml"
+    data["true_parameters"] = os.path.join(root, data["true_parameters"])
+    data["controller_options"]["interval"].pop("sampled_law")
+    box = edit(data, box) or box
+    (tmp_path / "box.yaml").write_text(yaml.safe_dump(box))
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(data))
+    return str(tmp_path / "s.yaml")
+
+
+@pytest.mark.parametrize(
+    "edit, words",
+    [
+        (lambda d, b: None, None),  # the scenario the controller was saved for: no refusal
+        (
+            lambda d, b: d.__setitem__("epsilon", 2e-2),
+            "synthesized for epsilon = 0.01, but {} asks for epsilon = 0.02",
+        ),
+        (
+            lambda d, b: d.__setitem__("sample_period", 5e-4),
+            "synthesized for sample_period = 0.001, but {} asks for sample_period = 0.0005",
+        ),
+        (
+            lambda d, b: b["links"]["link2"].__setitem__("mass", [5, 12]),
+            "box is not the scenario's uncertainty box (the intervals of link2 differ)",
+        ),
+        (
+            lambda d, b: b.__setitem__("disturbance", 3.0),
+            "(the disturbance bound (None saved, 3.0 in the scenario) differ)",
+        ),
+        (
+            lambda d, b: d["controller_options"]["interval"].__setitem__("kappa_P", 3),
+            "has kappa_P = 2, but {} states kappa_P: 3",
+        ),
+        (
+            lambda d, b: d["controller_options"]["interval"].__setitem__("Kr", [30, 20]),
+            "has Kr = [30, 30], but {} states Kr: [30, 20]",
+        ),
+        (
+            lambda d, b: d["controller_options"]["interval"].__setitem__("sampled_law", "paper"),
+            "has sampled_law = implicit, but {} states sampled_law: paper",
+        ),
+        (lambda d, b: d["controller_options"]["interval"].__setitem__("Kr", 30), None),
+    ],
+    ids=[
+        "same",
+        "epsilon",
+        "sample_period",
+        "link_interval",
+        "disturbance_bound",
+        "kappa_P",
+        "Kr",
+        "sampled_law",
+        "same_Kr_as_a_scalar",
+    ],  # fmt: skip
+)
+def test_run_refuses_a_saved_controller_whose_numbers_are_not_the_scenarios(
+    edit, words, tmp_path, capsys
+):
+    """A scenario edited after its controller was saved: ``urpc run --controller`` would judge
+    ``met`` against one epsilon while the controller adapts to another, or run a guarantee made
+    for another box. One error naming the saved file, the field and both values; the scenario
+    it was saved for passes the check (and fails only for want of a robot)."""
+    path = _saved(tmp_path)
+    scenario = _scenario(tmp_path, edit)
+    code, err, lines = _cli(
+        capsys, "run", scenario, "--robot-address", "udp://127.0.0.1:9", "--controller", str(path),
+    )  # fmt: skip
+    assert code == 2 and "Traceback" not in err and len(lines) == 1, err
+    if words is None:
+        assert "no state from the robot" in lines[0], lines[0]
+    else:
+        assert words.format(scenario) in lines[0], lines[0]
+        assert str(path) in lines[0]

@@ -120,6 +120,112 @@ def register(commands) -> None:
     add_json_argument(p, on_stdout=True)
 
 
+def _shown(value) -> str:
+    """A number or a list of numbers as it reads in a scenario file (``[30, 20]``, ``1e+06``)."""
+    if isinstance(value, str):
+        return value
+    try:
+        values = [float(v) for v in value]
+    except TypeError:
+        return f"{float(value):g}"
+    return "[" + ", ".join(f"{v:g}" for v in values) + "]"
+
+
+def _check_saved_against_scenario(controller, scenario, box, path, *, law_given: bool) -> None:
+    """Refuse a saved controller whose epsilon, sample period, gains or box are not the
+    scenario's.
+
+    The loop judges ``met`` against the scenario's epsilon and runs at the controller's period,
+    and the controller's guarantee is for its own box and gains: a scenario edited after the
+    controller was saved would otherwise be run and judged with numbers that are not the ones it
+    states. Gains and law are compared where the scenario states them (its
+    ``controller_options.interval``); ``law_given``: ``--sampled-law`` was checked already.
+    """
+    import dataclasses
+
+    import numpy as np
+
+    from ..control.certificate_key import canonical
+    from ..errors import InputError
+    from ..studies.scenario.run import interval_synthesis_options
+
+    where = scenario.source or scenario.name
+    redo = "synthesize the controller again (drop --controller, add --save-controller)"
+    for name, saved, wanted in (
+        ("epsilon", controller.epsilon, scenario.epsilon),
+        ("sample_period", controller.sample_period, scenario.sample_period),
+    ):
+        if float(saved) != float(wanted):
+            raise InputError(
+                f"the saved controller was synthesized for {name} = {saved:g}, but {where} "
+                f"asks for {name} = {wanted:g}; set {name}: {saved:g} in the scenario, or {redo}",
+                path,
+                name,
+            )
+    stated = interval_synthesis_options(scenario)
+    saved_values = {
+        "kappa_P": controller.kappa_P,
+        "kappa_I": controller.kappa_I,
+        "phi_P": controller.phi_P,
+        "phi_I": controller.phi_I,
+        "Kr": np.asarray(controller.Kr, dtype=float),
+        "method": controller.bound.name,
+        "sampled_law": getattr(controller, "sampled_law", None),
+    }
+    for name, saved in saved_values.items():
+        wanted = stated.get(name)
+        if wanted is None or (name == "sampled_law" and law_given):
+            continue
+        if isinstance(saved, np.ndarray):
+            wanted_array = np.asarray(wanted, dtype=float)
+            same = wanted_array.size in (1, saved.size) and bool(
+                np.all(np.broadcast_to(wanted_array.ravel(), saved.shape) == saved)
+            )
+        else:
+            same = saved == wanted
+        if not same:
+            raise InputError(
+                f"the saved controller has {name} = {_shown(saved)}, but {where} states {name}: "
+                f"{_shown(wanted)} (controller_options.interval); make the two agree, or {redo}",
+                path,
+                name,
+            )
+    saved_box = controller.bound.box
+
+    def form(b):
+        return canonical(dataclasses.replace(b, source=None))
+
+    if form(saved_box) == form(box):
+        return
+    saved_links = {link.link: canonical(link) for link in saved_box.links}
+    wanted_links = {link.link: canonical(link) for link in box.links}
+    differ = sorted(
+        name
+        for name in set(saved_links) | set(wanted_links)
+        if saved_links.get(name) != wanted_links.get(name)
+    )
+    parts = []
+    if differ:
+        parts.append("the intervals of " + ", ".join(differ))
+    if canonical(saved_box.payloads) != canonical(box.payloads):
+        parts.append("the payloads")
+    if canonical(saved_box.joints) != canonical(box.joints):
+        parts.append("the joint drives")
+    if canonical(saved_box.disturbance_bound) != canonical(box.disturbance_bound):
+        parts.append(
+            f"the disturbance bound ({saved_box.disturbance_bound} saved, "
+            f"{box.disturbance_bound} in the scenario)"
+        )
+    raise InputError(
+        "the saved controller's box is not the scenario's uncertainty box ("
+        + ("; ".join(parts) or "its values")
+        + f" differ); its guarantee holds for the box it was synthesized for, so run {where} "
+        "with that box, or synthesize the controller again (drop --controller)",
+        path,
+        "box",
+    )
+
+
 def run_robot(args) -> int:
     import numpy as np
 
@@ -186,6 +292,9 @@ def run_robot(args) -> int:
                 args.controller,
                 "sampled_law",
             )
+        _check_saved_against_scenario(
+            controller, scenario, setup.box, args.controller, law_given=args.sampled_law is not None
+        )
     else:
         options = interval_synthesis_options(scenario)
         if args.delay is not None:
