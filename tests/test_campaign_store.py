@@ -247,3 +247,18 @@ def test_vertex_runs_beyond_the_runs_say_so(scenario_file, tmp_path, capsys):
     out, err = capsys.readouterr()
     assert "warning: vertex_runs 5 exceeds the 2 runs: runs only 2 vertex runs" in err
     assert json.loads(out)["vertex_runs"] == 2
+
+
+def test_resume_with_nothing_recorded_says_it_starts_from_the_first_run(
+    scenario_file, tmp_path, capsys
+):
+    """``--resume`` on a folder with no recorded run (a mistyped --out, or a campaign killed
+    before its first run): one warning naming the folder, then the whole campaign."""
+    out = tmp_path / "typo"
+    argv = ["campaign", str(scenario_file), "--runs", "2", "--workers", "1", "--json"]
+    assert main([*argv, "--out", str(out), "--resume"]) == 0
+    stdout, err = capsys.readouterr()
+    assert f"warning: {out}: nothing to resume (no run recorded in {STORE_NAME})" in err, err
+    assert json.loads(stdout)["runs"] == 2
+    assert main([*argv, "--out", str(out), "--resume"]) == 0  # finished: read back, no warning
+    assert "nothing to resume" not in capsys.readouterr().err

@@ -26,6 +26,7 @@ import json
 import math
 import os
 import sqlite3
+import warnings
 from collections.abc import Mapping
 from dataclasses import asdict
 from pathlib import Path
@@ -108,6 +109,12 @@ class CampaignStore:
         # Nothing recorded yet, or a finished campaign (its outputs written) that a new one
         # replaces, as a new run replaces any output: (re)start with these settings.
         if row is None or done == 0 or (finished is not None and not resume):
+            if resume:  # asked to continue, and there is nothing to continue: say so
+                warnings.warn(
+                    f"{self.directory}: nothing to resume (no run recorded in {STORE_NAME}); "
+                    "starting the campaign from its first run",
+                    stacklevel=3,
+                )
             with self._connection:
                 self._connection.execute("DELETE FROM runs")
                 self._connection.execute("DELETE FROM settings WHERE key = 'finished'")
