@@ -189,6 +189,7 @@ CASES: dict[str, Case] = {
     "init_options_give_a_box_out_of_range": Case({}, ["init", "rr_planar", "--out", "{tmp}/b.yaml", "--com", "1e300"], None, ("--mass, --com, --inertia and --payload", "was not written"), names_file=""),
     "urdf_zero_axis": _urdf_case(_rr_with('<axis xyz="0 -1 0"/>', '<axis xyz="0 0 0"/>'), "joint.joint1.axis.xyz", "non-zero axis"),
     "urdf_negative_effort": _urdf_case(_rr_with('effort="1000" velocity="20"/>', 'effort="-5" velocity="20"/>'), "joint.joint1.limit.effort", "negative effort limit"),
+    "urdf_negative_damping": _urdf_case(_rr_with('effort="1000" velocity="20"/>', 'effort="1000" velocity="20"/><dynamics damping="-1" friction="0"/>'), "joint.joint1.dynamics.damping", "negative damping"),
     "simulate_out_unwritable_for_root_too": Case({}, ["simulate", "rr_planar/s3_ic1", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
     "campaign_out_unwritable_for_root_too": Case({}, ["campaign", "rr_planar/s3_ic1", "--runs", "2", "--out", "/proc/urpc-out"], None, ("/proc/urpc-out", "cannot write the output folder"), names_file=""),
     "campaign_neither_scenario_nor_robot": Case({}, ["campaign", "--runs", "2"], None, ("give a scenario file", "--robot"), names_file=""),

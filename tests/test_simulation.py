@@ -357,7 +357,6 @@ def test_invalid_arguments_name_the_field(true_plant):
         (None, dict(duration=0.0), "duration"),
         (None, dict(duration=1.0, q0=[0, 0, 0]), "q0"),
         (None, dict(duration=1.0, torque_limit=0.0), "torque_limit"),
-        (None, dict(duration=1.0, solver=SolverOptions(method="Euler")), "method"),
         (1e-3, dict(duration=1.0, plant_backend="bullet"), "plant"),
         (None, dict(duration=1.0, plant_backend="mujoco"), "plant"),  # continuous time
         (None, dict(duration=1.0, controller_state0=[1.0]), "controller_state0"),  # static law
@@ -366,6 +365,9 @@ def test_invalid_arguments_name_the_field(true_plant):
         with pytest.raises(InputError) as info:
             simulate(true_plant, at(period, controller), trajectory, epsilon=1.0, **kwargs)
         assert info.value.field == field, kwargs
+    with pytest.raises(InputError) as info:  # an unknown solver, refused where it is made
+        SolverOptions(method="Euler")
+    assert info.value.field == "method" and "valid: RK45" in str(info.value)
     with pytest.raises(TypeError, match="sample_period"):  # the period is the controller's alone
         simulate(true_plant, at(None, controller), trajectory, epsilon=1.0, duration=1.0,
                  sample_period=1e-3)  # fmt: skip

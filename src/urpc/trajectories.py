@@ -125,9 +125,33 @@ class Trajectory(ABC):
         return q, radius_q, qd, radius_qd, qdd, radius_qdd, J
 
 
+def _joints(value: Sequence[float] | np.ndarray, name: str) -> np.ndarray:
+    """``value`` as one finite number per joint (at least one joint): what sets a reference's
+    joint count."""
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(
+            f"{value!r} is not a list of numbers, one per joint [rad]", field=name
+        ) from None
+    if array.ndim > 1 or array.size == 0:
+        raise InputError(
+            f"{name} has shape {array.shape}; give one number per joint [rad]", field=name
+        )
+    array = array.reshape(-1)
+    if not np.all(np.isfinite(array)):
+        raise InputError(f"{name} must be finite, got {array.tolist()}", field=name)
+    return array
+
+
 def _vector(value: float | Sequence[float] | np.ndarray, dof: int, name: str) -> np.ndarray:
-    array = np.asarray(value, dtype=float)
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{value!r} is not a number or {dof} numbers", field=name) from None
     if array.ndim == 0:
+        if not np.isfinite(array):
+            raise InputError(f"{name} must be finite, got {float(array)}", field=name)
         return np.full(dof, float(array))
     if array.shape != (dof,):
         raise InputError(
@@ -148,7 +172,7 @@ class PaperTrajectory(Trajectory):
     kind = "paper"
 
     def __init__(self, amplitude: Sequence[float] = (np.pi / 4, -np.pi / 8)):
-        self.amplitude = np.asarray(amplitude, dtype=float).reshape(-1)
+        self.amplitude = _joints(amplitude, "amplitude")
         self.dof = len(self.amplitude)
 
     def evaluate(self, t):
@@ -203,7 +227,7 @@ class SinusoidTrajectory(Trajectory):
     kind = "sinusoid"
 
     def __init__(self, home, amplitude, frequency, phase=0.0):
-        self.home = np.asarray(home, dtype=float).reshape(-1)
+        self.home = _joints(home, "home")
         self.dof = len(self.home)
         self.amplitude = _vector(amplitude, self.dof, "amplitude")
         self.frequency = _vector(frequency, self.dof, "frequency")
@@ -303,8 +327,19 @@ class QuinticTrajectory(Trajectory):
     kind = "quintic"
 
     def __init__(self, points, times):
-        self.points = np.atleast_2d(np.asarray(points, dtype=float))
-        self.times = np.asarray(times, dtype=float).reshape(-1)
+        try:
+            self.points = np.atleast_2d(np.asarray(points, dtype=float))
+            self.times = np.asarray(times, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise InputError(
+                "points must be a (points, joints) array of numbers and times a list of numbers "
+                "(every point with the same number of joints)",
+                field="points",
+            ) from None
+        if self.points.ndim != 2 or self.points.shape[1] == 0:
+            raise InputError(
+                f"points has shape {self.points.shape}; give (points, joints)", field="points"
+            )
         if len(self.points) < 2 or len(self.times) != len(self.points):
             raise InputError(
                 f"need at least 2 points and one time per point, got {len(self.points)} points "

@@ -20,8 +20,16 @@ if TYPE_CHECKING:
 MAX_AMPLITUDE = {"revolute": 0.5, "continuous": 0.5, "prismatic": 0.05}  # [rad], [rad], [m]
 
 
+def _check_robot(robot) -> None:
+    from .model.robot import Robot
+    from .validation import check_type
+
+    check_type("robot", robot, Robot, "a Robot (urpc.load_robot(...))")
+
+
 def home_configuration(robot: Robot) -> np.ndarray:
     """The middle of each joint's limits [rad or m], or 0 where a limit is infinite."""
+    _check_robot(robot)
     lower, upper = robot.position_limits
     with np.errstate(invalid="ignore"):  # -inf + inf on a continuous joint, replaced below
         middle = 0.5 * (lower + upper)
@@ -57,6 +65,7 @@ def generic_trajectory(
     """
     from .trajectories import QUINTIC_PEAK_VELOCITY, QuinticTrajectory, SinusoidTrajectory, _vector
 
+    _check_robot(robot)
     if kind not in ("sinusoid", "quintic"):
         raise InputError(
             f"unknown generic trajectory kind '{kind}'; valid: sinusoid, quintic", field="kind"

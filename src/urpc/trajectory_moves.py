@@ -23,6 +23,7 @@ from .trajectories import (
     Reference,
     Trajectory,
 )
+from .validation import number_in, positive_number
 
 
 # ============================================================================ waypoints
@@ -42,6 +43,38 @@ def segment_durations(
     return np.maximum(np.maximum(by_speed, by_acceleration).max(axis=1), minimum)
 
 
+def move_limits(dof: int, velocity_limit, acceleration_limit, minimum) -> tuple:
+    """``(velocity_limit, acceleration_limit, minimum)`` checked: the limits ``> 0`` per joint
+    (a scalar for every joint; ``inf``: no limit), ``minimum`` a finite duration ``> 0`` [s].
+
+    Raises:
+        InputError: a limit that is not a number, NaN, ``<= 0`` or of another length than the
+            ``dof`` joints; a ``minimum`` that is not finite and ``> 0`` (each names its field).
+    """
+    limits = []
+    for field, value, unit in (
+        ("velocity_limit", velocity_limit, "rad/s"),
+        ("acceleration_limit", acceleration_limit, "rad/s^2"),
+    ):
+        try:
+            array = np.array(value, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(
+                f"{value!r} is not a number or {dof} numbers [{unit}]", field=field
+            ) from None
+        if array.ndim == 0:
+            array = np.full(dof, float(array))
+        if array.shape != (dof,) or not np.all(array > 0):
+            raise InputError(
+                f"{value!r} must be one number or {dof} numbers (one per joint), each > 0 "
+                f"[{unit}] (inf: no limit)",
+                field=field,
+            )
+        limits.append(array)
+    minimum = positive_number("minimum", minimum, "a finite duration > 0 [s]")
+    return limits[0], limits[1], minimum
+
+
 class WaypointTrajectory(QuinticTrajectory):
     """Rest-to-rest quintic segments through ``points`` ``(K, dof)`` [rad], at ``times`` [s] or, by
     default, each segment as short as ``velocity_limit`` [rad/s] and ``acceleration_limit``
@@ -59,10 +92,21 @@ class WaypointTrajectory(QuinticTrajectory):
         minimum=0.5,
         start=0.0,
     ):
-        points = np.atleast_2d(np.asarray(points, dtype=float))
+        try:
+            points = np.atleast_2d(np.asarray(points, dtype=float))
+        except (TypeError, ValueError):
+            raise InputError(
+                "points must be a (points, joints) array of numbers, every point with the same "
+                "number of joints",
+                field="points",
+            ) from None
         if times is None:
             if len(points) < 2:
                 raise InputError("need at least 2 waypoints", field="points")
+            velocity_limit, acceleration_limit, minimum = move_limits(
+                points.shape[1], velocity_limit, acceleration_limit, minimum
+            )
+            start = number_in("start", start, "a finite time [s]", lambda x: True)
             durations = segment_durations(points, velocity_limit, acceleration_limit, minimum)
             times = start + np.concatenate([[0.0], np.cumsum(durations)])
         super().__init__(points, times)
@@ -92,13 +136,16 @@ class StreamedReference(Trajectory):
     def __init__(
         self, q0, *, velocity_limit=np.inf, acceleration_limit=np.inf, minimum: float = 0.05
     ):
-        q0 = np.asarray(q0, dtype=float).reshape(-1)
+        try:
+            q0 = np.asarray(q0, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise InputError(f"{q0!r} is not a vector of joint positions", field="q0") from None
+        if q0.size == 0 or not np.all(np.isfinite(q0)):
+            raise InputError(f"{q0.tolist()} must be finite joint positions [rad]", field="q0")
         self.dof = len(q0)
-        self.velocity_limit = np.broadcast_to(np.asarray(velocity_limit, float), (self.dof,))
-        self.acceleration_limit = np.broadcast_to(
-            np.asarray(acceleration_limit, float), (self.dof,)
+        self.velocity_limit, self.acceleration_limit, self.minimum = move_limits(
+            self.dof, velocity_limit, acceleration_limit, minimum
         )
-        self.minimum = float(minimum)
         zeros = np.zeros(self.dof)
         self._segment = (0.0, np.inf, _quintic(q0, zeros, zeros, q0, 1.0), q0)
         self._lock = threading.Lock()
@@ -106,9 +153,17 @@ class StreamedReference(Trajectory):
 
     def set_target(self, q, t: float, duration: float | None = None) -> float:
         """Move to ``q`` [rad] starting at loop time ``t`` [s]; returns the segment's duration."""
-        q = np.asarray(q, dtype=float).reshape(self.dof)
+        try:
+            q = np.asarray(q, dtype=float).reshape(self.dof)
+        except (TypeError, ValueError):
+            raise InputError(
+                f"{q!r} is not {self.dof} joint positions (one per joint)", field="target"
+            ) from None
         if not np.all(np.isfinite(q)):
             raise InputError(f"target {q.tolist()} is not finite", field="target")
+        t = number_in("t", t, "a finite time [s]", lambda x: True)
+        if duration is not None:
+            duration = positive_number("duration", duration, "a finite duration > 0 [s] or None")
         current = self.reference(t)
         if duration is None:
             points = np.stack([current.q, q])

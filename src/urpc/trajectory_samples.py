@@ -36,10 +36,17 @@ class FileTrajectory(Trajectory):
 
         self.source = None if source is None else str(source)
         self.header_lines = header_lines
-        self.t = np.asarray(t, dtype=float).reshape(-1)
-        self.q = np.asarray(q, dtype=float)
+        self.t = self._array("t", t).reshape(-1)
+        self.q = self._array("q", q)
         if self.q.ndim == 1:
             self.q = self.q[:, None]
+        if self.q.ndim != 2 or self.q.shape[1] == 0:
+            raise InputError(
+                f"q has shape {self.q.shape}; give one row per time and one column per joint "
+                "(samples, joints)",
+                self.source,
+                "q",
+            )
         if len(self.t) < 2 or self.q.shape[0] != len(self.t):
             raise InputError(
                 f"need at least 2 samples and one row of q per time, got {len(self.t)} times and "
@@ -47,6 +54,16 @@ class FileTrajectory(Trajectory):
                 self.source,
                 "q",
             )
+        # qd and qdd exactly as q (a transposed array of the same size would be reshaped into
+        # scrambled velocities); a single joint's may be a plain vector.
+        if qd is None and qdd is not None:
+            raise InputError(
+                "qdd without qd: give the velocities too (or neither)", self.source, "qdd"
+            )
+        qd, qdd = (
+            None if values is None else self._array(name, values, self.q.shape)
+            for name, values in (("qd", qd), ("qdd", qdd))
+        )
         for name, values in (("t", self.t), ("q", self.q), ("qd", qd), ("qdd", qdd)):
             if values is not None and not np.all(np.isfinite(values)):
                 row = int(
@@ -89,6 +106,29 @@ class FileTrajectory(Trajectory):
         self._spline = spline
         self._velocity = spline.derivative(1)
         self._acceleration = spline.derivative(2)
+
+    def _array(self, name: str, values, shape: tuple | None = None) -> np.ndarray:
+        """``values`` as a float array (of ``shape``, when given: a single joint's column may
+        be a plain vector), or one error naming ``name``."""
+        try:
+            array = np.asarray(values, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(
+                f"{name} is not an array of numbers (got {type(values).__name__})",
+                self.source,
+                name,
+            ) from None
+        if shape is not None:
+            if array.ndim == 1 and shape[1] == 1:
+                array = array[:, None]
+            if array.shape != shape:
+                raise InputError(
+                    f"{name} has shape {array.shape}, but q has shape {shape} (samples, joints): "
+                    f"give {name} as q, one row per time",
+                    self.source,
+                    name,
+                )
+        return array
 
     def _warn_if_not_at_rest(self) -> None:
         """From ``q`` alone the spline starts and ends at rest: samples that start or end moving

@@ -66,8 +66,10 @@ def number_in(field: str, value: Any, expected: str, valid: Callable[[float], bo
         )
     try:
         number = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{value!r} is not a number; expected {expected}", field=field) from None
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(
+            f"{value!r:.60} is not a (double precision) number; expected {expected}", field=field
+        ) from None
     if not (math.isfinite(number) and valid(number)):
         raise InputError(f"{value!r} is out of range; expected {expected}", field=field)
     return number

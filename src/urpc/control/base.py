@@ -92,6 +92,17 @@ class Controller(ABC):
             return state
         return state + self.sample_period * self.state_derivative(t, q, qd, reference, state)
 
+    def check_state(self, state, field: str = "controller_state0") -> np.ndarray:
+        """``state`` as a valid internal state (:attr:`n_states` finite numbers), for a caller
+        that sets one (``urpc.simulate(..., controller_state0=...)``).
+
+        Raises:
+            InputError: another length, or a value the law never reaches (``field`` named).
+        """
+        from ..validation import finite_vector
+
+        return finite_vector(field, state, self.n_states)
+
     def diagnostics(self, state: np.ndarray) -> dict[str, float]:
         """The scalars named in :attr:`diagnostic_units` at this state (e.g. ``phi``,
         ``kappa``)."""

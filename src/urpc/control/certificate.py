@@ -185,6 +185,14 @@ def certify(
             "disturbance_bound", disturbance_bound, "a finite number >= 0 [N m]", lambda x: x >= 0
         )
     d = box.disturbance_bound if disturbance_bound is None else float(disturbance_bound)
+    if cells is not None and (
+        isinstance(cells, bool) or not isinstance(cells, int | np.integer) or cells < 1
+    ):
+        raise InputError(
+            f"{cells!r} is not a number of cells; expected an integer >= 1, or None (chosen from "
+            "the reference's speed)",
+            field="cells",
+        )
     conditions = controller.gain_law.conditions()
     law_delay = int(controller.delay)
     delay = max(law_delay, actuation_delay_of(controller, actuation_delay))

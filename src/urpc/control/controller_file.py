@@ -161,6 +161,7 @@ def check_controller_path(
     Raises:
         InputError: what is in the way, and what to give instead.
     """
+    _check_path_type(path)
     path = Path(path).expanduser()
     where = label or str(path)
     if path.is_dir():
@@ -179,6 +180,15 @@ def check_controller_path(
     return path
 
 
+def _check_path_type(path) -> None:
+    if not isinstance(path, str | Path) or not str(path):
+        raise InputError(
+            f"expected the controller file's path (a str or Path such as 'arm.json'), got "
+            f"{path!r:.60}",
+            field="path",
+        )
+
+
 def load_controller(path: str | Path):
     """The controller saved in ``path`` by :func:`save_controller`, synthesized again.
 
@@ -191,12 +201,13 @@ def load_controller(path: str | Path):
     from ..model.uncertainty import parse_uncertainty
     from .synthesis import synthesize
 
+    _check_path_type(path)
     path = Path(path)
     if not path.is_file():
         raise InputError(no_file(path, "controller file"), path)
     try:
         payload = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, RecursionError) as exc:  # RecursionError: nested too deep
         raise InputError(f"not a JSON controller file ({exc})", path) from None
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise InputError(f"not a urpc controller file (format is not '{FORMAT}')", path, "format")

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import InputError
 from ..trajectories import Reference
 from .interval import IntervalPassivityController
 
@@ -66,7 +67,19 @@ class DelayedIntervalController(IntervalPassivityController):
 
     def output(self, t, q, qd, reference, state):
         """The torque for the period after the next one [N m]: the law at the predicted state."""
-        q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+        try:
+            q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+            if not (q.shape == qd.shape == self._dof_shape and len(state) == self.n_states):
+                raise ValueError("wrong size")
+        except (TypeError, ValueError) as exc:  # name the caller's vector, not the prediction's
+            raise (
+                self.state_error(q, qd, reference)
+                or InputError(
+                    f"the state has {len(state)} entries; this law's has {self.n_states} (the "
+                    "gain integral, then the torque in flight): use controller.initial_state()",
+                    field="state",
+                )
+            ) from exc
         k = self._adaptive_states
         T = self.sample_period
         q_next, qd_next = self.predict(q, qd, state[k:])

@@ -163,6 +163,19 @@ class IntervalPassivityController(Controller):
         """``(phi, kappa)`` for the state ``[s]`` (Theorem 2) or the constants (Theorem 1)."""
         return self._gain_law.gains(state)
 
+    def check_state(self, state, field: str = "controller_state0") -> np.ndarray:
+        """As :meth:`Controller.check_state`; the adaptive law's integral ``s`` (Theorem 2)
+        must also be ``>= 0``: it only grows from 0, and a negative one makes the gain negative."""
+        vector = super().check_state(state, field)
+        adaptive = vector[: self._gain_law.n_states]
+        if np.any(adaptive < 0):
+            raise InputError(
+                f"the gain integral s = {adaptive.tolist()} must be >= 0 (Theorem 2's s grows "
+                "from 0; phi = phi_P + phi_I s)",
+                field=field,
+            )
+        return vector
+
     def output(
         self, t: float, q: np.ndarray, qd: np.ndarray, reference: Reference, state: np.ndarray
     ) -> np.ndarray:

@@ -17,7 +17,7 @@ from ..errors import InputError
 from ..model.inertia_bounds import InertiaBounds
 from ..model.robot import Robot
 from ..model.uncertainty import ParameterBox
-from ..validation import number_in
+from ..validation import check_type, number_in
 from . import SAMPLED_LAWS
 from .base import sample_period_of
 from .interval import IntervalPassivityController
@@ -71,6 +71,7 @@ def synthesize(
         InputError: a gain or ``epsilon`` out of range (the message names the field and the valid
             range), an unknown bound method.
     """
+    check_type("robot", robot, Robot, "a Robot (urpc.load_robot(...))")
     epsilon = number_in("epsilon", epsilon, "a finite number > 0 [rad]", lambda x: x > 0)
     kappa_P = number_in("kappa_P", kappa_P, "a finite number >= 1 (Theorem 1)", lambda x: x >= 1)
     phi_P = number_in("phi_P", phi_P, "a finite number >= 1 (Theorem 1)", lambda x: x >= 1)
@@ -117,6 +118,10 @@ def _gain_matrix(Kr, epsilon: float, dof: int) -> np.ndarray:
     if Kr is None:
         return np.full(dof, 3.0 / math.sqrt(epsilon))
     expected = f"a scalar, {dof} numbers or a diagonal {dof}x{dof} matrix, all finite and > 0 [1/s]"
+    if isinstance(Kr, str | bytes | bool):  # as epsilon: a text or a flag is not a gain
+        raise InputError(
+            f"{Kr!r} is a {type(Kr).__name__}, not a number; expected {expected}", field="Kr"
+        )
     try:
         gains = np.array(Kr, dtype=float)
     except (TypeError, ValueError):

@@ -14,6 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal, Union
 
+import numpy as np
 from pydantic import (
     BaseModel,
     BeforeValidator,
@@ -234,6 +235,9 @@ class Interval:
 
 
 def _number_or_fail(text: Any, raw: Any, what: str) -> float:
+    # numpy's scalars (np.int64 from an array, np.float32) are numbers too; a flag is not
+    if isinstance(text, np.integer | np.floating):
+        text = text.item()
     if isinstance(text, str | int | float) and not isinstance(text, bool):
         try:
             return float(text) if not isinstance(text, str) else evaluate(text)

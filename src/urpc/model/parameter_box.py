@@ -253,9 +253,20 @@ class ParameterBox:
         inertias = {}
         for name, values in point.links.items():
             # Links without a box are given in physical coordinates.
-            inertias[name] = (
+            inertia = (
                 boxed[name].inertia(values) if name in boxed else inertia_from_physical(values)
             )
+            # A negative (or NaN) mass is no body at all. (A vertex of a barycentric box may
+            # carry an inertia that is not positive semi-definite: the bounds cover that
+            # superset of the box's rigid bodies, and the tests build plants there.)
+            if not inertia.mass >= 0:
+                raise InputError(
+                    f"the point gives '{name}' the mass {inertia.mass:g} kg; a mass must be >= 0 "
+                    f"(values {np.asarray(values).tolist()})",
+                    self.source,
+                    f"point.{name}",
+                )
+            inertias[name] = inertia
         return robot.with_link_inertias(inertias)
 
     def vertex(self, index: int) -> ParameterPoint:

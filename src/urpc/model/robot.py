@@ -11,6 +11,7 @@ All rigid-body math is Pinocchio's. This module adds what the controller needs o
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -305,6 +306,42 @@ class Robot:
         )
 
 
+def _locked_joints(locked_joints, urdf) -> dict[str, float | None]:
+    """``locked_joints`` as names -> position (``None``: the joint's default), or one error
+    naming the argument (a single name given as a text, a position that is no number)."""
+    field = "locked_joints"
+    if isinstance(locked_joints, str | bytes):
+        raise InputError(
+            f"{locked_joints!r} is a text; give a list of joint names ([{locked_joints!r}]) or "
+            "a mapping of names to positions",
+            source=urdf,
+            field=field,
+        )
+    if isinstance(locked_joints, Mapping):
+        locked = {}
+        for name, value in locked_joints.items():
+            try:
+                position = float(value)
+            except (TypeError, ValueError):
+                position = math.nan
+            if isinstance(value, str | bytes | bool) or not math.isfinite(position):
+                raise InputError(
+                    f"{value!r} is not a finite position [rad or m] for joint {name!r}",
+                    source=urdf,
+                    field=f"{field}.{name}",
+                )
+            locked[str(name)] = position
+        return locked
+    try:
+        return {str(name): None for name in locked_joints}
+    except TypeError:
+        raise InputError(
+            f"{locked_joints!r} is not a list of joint names or a mapping of names to positions",
+            source=urdf,
+            field=field,
+        ) from None
+
+
 def load_robot(
     source: str | Path, locked_joints: Sequence[str] | Mapping[str, float] = ()
 ) -> Robot:
@@ -334,10 +371,7 @@ def load_robot(
             + (f" (the URDF parser: {said})" if said else ""),
             source=entry.urdf,
         ) from None
-    if isinstance(locked_joints, Mapping):
-        locked = {str(k): float(v) for k, v in locked_joints.items()}
-    else:
-        locked = {str(name): None for name in locked_joints}
+    locked = _locked_joints(locked_joints, entry.urdf)
     if locked:
         model, locked = lock_joints(model, locked, entry.urdf)
     check_mimic_joints(entry.urdf, locked)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import copy
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -117,6 +118,14 @@ def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) ->
             ("this box is for robot X").
     """
     check_type("robot", robot, Robot, "a Robot (urpc.load_robot(...))")
+    if not isinstance(document, Mapping):
+        raise InputError(
+            f"expected a mapping with 'links' (and optionally 'payload', 'joints', "
+            f"'disturbance'), got {type(document).__name__}; {{'links': {{}}}} says every "
+            "parameter is exact",
+            source=source,
+            field="document",
+        )
     hints = {"payload.link": robot.moving_link_names, "joints": robot.joint_names}
     spec = validate(UncertaintyFile, document, source, hints=hints)
     if spec.robot is not None and not _same_robot(spec.robot, robot):

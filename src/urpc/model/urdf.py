@@ -303,6 +303,17 @@ def read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
                         source=path,
                         field=f"joint.{name}.limit.{attribute}",
                     )
+        dynamics = joint.find("dynamics")
+        if dynamics is not None and kind != "fixed":
+            for attribute in ("damping", "friction"):
+                value = dynamics.get(attribute)
+                if value is not None and float(value) < 0:
+                    raise InputError(
+                        f"joint '{name}' has a negative {attribute} ({float(value):g}); a "
+                        f"joint's {attribute} is >= 0 (it dissipates)",
+                        source=path,
+                        field=f"joint.{name}.dynamics.{attribute}",
+                    )
         if kind in ("revolute", "prismatic"):
             lower, upper = (float(limit.get(end, "0")) for end in ("lower", "upper"))
             if lower > upper:

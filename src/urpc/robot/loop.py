@@ -22,7 +22,7 @@ import numpy as np
 from ..control.base import Controller
 from ..errors import InputError
 from ..trajectories import Trajectory
-from ..validation import check_trajectory_dof
+from ..validation import check_trajectory_dof, positive_number
 
 #: Rows the log holds before it doubles.
 DEFAULT_CAPACITY = 16_384
@@ -67,15 +67,39 @@ class ControlLoop:
         clock=time.perf_counter,
         velocity_filter_hz: float | None = None,
     ):
+        if not callable(getattr(controller, "output", None)) or not hasattr(
+            controller, "initial_state"
+        ):
+            raise InputError(
+                f"expected a controller (urpc.synthesize(...), urpc.load_controller(...)), got "
+                f"{type(controller).__name__}",
+                field="controller",
+            )
         self.controller = controller
         self.trajectory = trajectory
-        period = period if period is not None else controller.sample_period
-        if period is None or not float(period) > 0:
-            raise ValueError("the loop needs a period: give period= or a sampled controller")
-        self.period = float(period)
+        own = getattr(controller, "sample_period", None)
+        if period is None and own is None:
+            raise InputError(
+                "the loop needs a period: give period= or a controller synthesized with a "
+                "sample_period",
+                field="period",
+            )
+        self.period = positive_number(
+            "period", own if period is None else period, "a finite number > 0 [s]"
+        )
+        if own is not None and self.period != float(own):
+            raise InputError(
+                f"{self.period:g} s is not the controller's period {float(own):g} s (its law is "
+                "discretized for it); omit period= or synthesize the controller for this period",
+                field="period",
+            )
         if epsilon is None:  # Controller.epsilon is None for a law without one (r-alpha)
             epsilon = getattr(controller, "epsilon", None)
-        self.epsilon = math.nan if epsilon is None else float(epsilon)
+        self.epsilon = (
+            math.nan
+            if epsilon is None
+            else positive_number("epsilon", epsilon, "a finite number > 0 [rad]")
+        )
         if controller.dof is not None:
             name = getattr(controller.robot, "name", controller.name)
             check_trajectory_dof(trajectory, controller.dof, f"the robot {name!r}")
@@ -111,6 +135,12 @@ class ControlLoop:
                 field="diagnostic_units",
             )
         self.diagnostic_units: dict[str, str] = units
+        if isinstance(capacity, bool) or not isinstance(capacity, int | np.integer):
+            raise InputError(
+                f"{capacity!r} is not a whole number; expected the log's initial rows, an "
+                "integer >= 1",
+                field="capacity",
+            )
         self._capacity = max(16, int(capacity))
         self.reset()
 
@@ -158,6 +188,8 @@ class ControlLoop:
         with ``velocity_filter_hz`` the controller gets its filtered value
         (:meth:`filter_velocity`), logged as ``qd_filtered`` next to the measured ``qd``."""
         tic = self._clock()
+        if not (type(t) is float and math.isfinite(t)):  # noqa: E721 (exact type: the fast path)
+            t = self._time(t)
         controller, state = self.controller, self.state
         measured = qd
         if self._omega is not None:
@@ -220,6 +252,18 @@ class ControlLoop:
         it)."""
         return {name: array[: self.samples].copy() for name, array in self._log.items()}
 
+    @staticmethod
+    def _time(t) -> float:
+        """``t`` as a finite float [s], or one error naming it."""
+        if not isinstance(t, str | bytes | bool):
+            try:
+                value = float(t)
+            except (TypeError, ValueError):
+                value = math.nan
+            if math.isfinite(value):
+                return value
+        raise InputError(f"{t!r} is not a finite time [s]", field="t")
+
     def step_time_percentiles(self) -> dict[str, float]:
         """p50, p99, p99.9 and max of the step time [s]."""
         return percentiles(self._log["step_time"][: self.samples])
@@ -241,7 +285,10 @@ class ControlLoop:
         from ..sim.results import SimulationResult
 
         if self.samples == 0:
-            raise ValueError("the loop has not run: nothing to report")
+            raise InputError(
+                "the loop has not run: nothing to report; call step() at least once first",
+                field="result",
+            )
         s = self.series()
         t = s["t"]
         return SimulationResult(

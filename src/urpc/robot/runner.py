@@ -29,6 +29,8 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import InputError
+from ..validation import positive_number
 from .interface import RobotInterface, RobotState
 from .loop import ControlLoop
 from .packet import seq_diff
@@ -90,6 +92,15 @@ def run(
     """Drive ``robot`` with ``loop`` for ``duration`` [s] of loop time, behind ``safety`` and
     ``watchdog``; the robot is stopped (:meth:`RobotInterface.stop`) however the run ends.
     ``first``: a state already read (its sample is the run's first)."""
+    duration = positive_number("duration", duration, "a finite number > 0 [s]")
+    start_timeout = positive_number("start_timeout", start_timeout, "a finite number > 0 [s]")
+    if safety.dof != loop.dof:
+        raise InputError(
+            f"the safety layer guards {safety.dof} joints ({', '.join(safety.joint_names)}) and "
+            f"the loop drives {loop.dof}; build both for the same arm "
+            "(SafetyLayer.for_robot(controller.robot, period))",
+            field="safety",
+        )
     period = loop.period
     cycles_wanted = max(1, math.ceil(duration / period - 1e-9)) + 1
     read_timeout = min(period, watchdog.silence)

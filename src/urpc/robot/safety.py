@@ -27,6 +27,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..names import SAFE_MODES
+from ..validation import number_in, positive_number
 
 #: Interventions logged in full (all are counted).
 MAX_EVENTS = 1000
@@ -43,6 +44,30 @@ KINDS = (
 )
 #: Kinds after which the loop stops.
 FAULTS = ("non_finite_state", "position_limit", "velocity_limit", "non_finite_torque", "watchdog")
+
+
+def _per_joint(
+    field: str, value, n: int | None, unit: str, *, finite: bool = True, broadcast: bool = True
+) -> np.ndarray:
+    """``value`` as a float vector of ``n`` entries (a scalar is every joint's when
+    ``broadcast``; ``n = None``: any length), not NaN, and finite when ``finite``."""
+    try:
+        array = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(
+            f"{value!r} is not a number or a list of numbers [{unit}]", field=field
+        ) from None
+    if broadcast and array.ndim == 0 and n is not None:
+        array = np.full(n, float(array))
+    array = array.reshape(-1) if array.ndim == 0 else array
+    if array.ndim != 1 or (n is not None and array.shape != (n,)):
+        count = "one number" if n is None else f"{n} numbers (one per joint)"
+        raise InputError(f"{value!r} must be {count} [{unit}]", field=field)
+    bad = np.isnan(array) | (~np.isfinite(array) if finite else False)
+    if bad.any():
+        kind = "finite" if finite else "numbers (not NaN)"
+        raise InputError(f"{array.tolist()}: every entry must be {kind} [{unit}]", field=field)
+    return array
 
 
 @dataclass(frozen=True)
@@ -95,37 +120,63 @@ class SafetyLayer:
         damping=None,
         joint_names=None,
     ):
-        self.torque_limit = np.array(torque_limit, dtype=float).reshape(-1)
+        self.torque_limit = _per_joint("torque_limit", torque_limit, None, "N m", finite=False)
         self.dof = n = len(self.torque_limit)
-        if not np.all(self.torque_limit > 0):
+        if n == 0 or not np.all(self.torque_limit > 0):
             raise InputError(
-                f"{self.torque_limit.tolist()}: every torque limit must be > 0 [N m]",
+                f"{self.torque_limit.tolist()}: every torque limit must be > 0 [N m], one per "
+                "joint",
                 field="torque_limit",
             )
-        self.period = float(period)
+        self.period = positive_number("period", period, "a finite number > 0 [s]")
         self.rate_step = None
         if torque_rate_limit is not None:
-            rate = np.broadcast_to(np.asarray(torque_rate_limit, dtype=float), (n,))
+            rate = _per_joint("torque_rate_limit", torque_rate_limit, n, "N m/s", finite=False)
             if not np.all(rate > 0):
                 raise InputError(f"{rate.tolist()}: must be > 0 [N m/s]", field="torque_rate_limit")
             self.rate_step = rate * self.period
-        lower, upper = (
-            (np.full(n, -np.inf), np.full(n, np.inf))
-            if position_limits is None
-            else position_limits
+        self.position_margin = number_in(
+            "position_margin", position_margin, "a finite number >= 0 [rad]", lambda x: x >= 0
         )
-        if not 0 <= position_margin:
-            raise InputError(f"{position_margin} must be >= 0 [rad]", field="position_margin")
-        self.position_margin = float(position_margin)
-        self.lower = np.asarray(lower, dtype=float) + position_margin
-        self.upper = np.asarray(upper, dtype=float) - position_margin
-        if not 0 <= velocity_margin < 1:
-            raise InputError(f"{velocity_margin} must be in [0, 1)", field="velocity_margin")
-        self.velocity_margin = float(velocity_margin)
-        limit = np.full(n, np.inf) if velocity_limit is None else np.asarray(velocity_limit, float)
+        if position_limits is None:
+            lower, upper = np.full(n, -np.inf), np.full(n, np.inf)
+        else:
+            try:
+                lower, upper = position_limits
+            except (TypeError, ValueError):
+                raise InputError(
+                    f"{position_limits!r} is not a pair (lower, upper) of {n} numbers each",
+                    field="position_limits",
+                ) from None
+            lower = _per_joint("position_limits", lower, n, "rad", finite=False, broadcast=False)
+            upper = _per_joint("position_limits", upper, n, "rad", finite=False, broadcast=False)
+        self.lower = lower + self.position_margin
+        self.upper = upper - self.position_margin
+        closed = np.flatnonzero(~(self.lower <= self.upper))
+        if closed.size:
+            j = int(closed[0])
+            name = joint_names[j] if joint_names and len(joint_names) == n else f"joint {j + 1}"
+            raise InputError(
+                f"{name}: the limits [{lower[j]:g}, {upper[j]:g}] less the margin "
+                f"{self.position_margin:g} leave no allowed position; give lower <= upper and a "
+                "smaller position_margin",
+                field="position_limits" if lower[j] > upper[j] else "position_margin",
+            )
+        self.velocity_margin = number_in(
+            "velocity_margin", velocity_margin, "a number in [0, 1)", lambda x: 0 <= x < 1
+        )
+        if velocity_limit is None:
+            limit = np.full(n, np.inf)
+        else:
+            limit = _per_joint("velocity_limit", velocity_limit, n, "rad/s", finite=False)
+            if np.any(limit < 0):
+                raise InputError(
+                    f"{limit.tolist()}: a velocity limit must be > 0 [rad/s] (0 or inf: none)",
+                    field="velocity_limit",
+                )
         limit = np.where(np.isfinite(limit) & (limit > 0), limit, np.inf)
         self.velocity_limit = limit
-        self.velocity_bound = limit * (1.0 - velocity_margin)
+        self.velocity_bound = limit * (1.0 - self.velocity_margin)
         if safe_mode not in SAFE_MODES:
             raise InputError(
                 f"unknown safe mode {safe_mode!r}; valid: {', '.join(SAFE_MODES)}",
@@ -134,7 +185,15 @@ class SafetyLayer:
         self.safe_mode = safe_mode
         if damping is None:
             damping = np.where(np.isfinite(limit), self.torque_limit / limit, 1.0)
-        self.damping = np.broadcast_to(np.asarray(damping, dtype=float), (n,)).copy()
+        self.damping = _per_joint("damping", damping, n, "N m s/rad").copy()
+        if np.any(self.damping < 0):
+            raise InputError(
+                f"{self.damping.tolist()}: the brake's damping must be >= 0 [N m s/rad] (a "
+                "negative one pushes the arm along its velocity)",
+                field="damping",
+            )
+        if joint_names is not None and len(joint_names) != n:
+            raise InputError(f"{len(joint_names)} names for {n} joints", field="joint_names")
         self.joint_names = (
             tuple(joint_names) if joint_names else tuple(f"joint {i + 1}" for i in range(n))
         )
@@ -164,7 +223,7 @@ class SafetyLayer:
                     field="torque_limit",
                 )
             torque_limit = effort
-        torque_limit = np.broadcast_to(np.asarray(torque_limit, dtype=float), (robot.dof,))
+        torque_limit = _per_joint("torque_limit", torque_limit, robot.dof, "N m", finite=False)
         return cls(
             torque_limit,
             period,
@@ -176,7 +235,12 @@ class SafetyLayer:
 
     # ------------------------------------------------------------------ checks
     def check_state(self, t: float, q: np.ndarray, qd: np.ndarray) -> Intervention | None:
-        """The first state fault at time ``t`` [s], logged, or ``None`` when the state is fine."""
+        """The first state fault at time ``t`` [s], logged, or ``None`` when the state is fine.
+
+        Raises:
+            InputError: ``q`` or ``qd`` is not ``dof`` numbers (a robot of another arm).
+        """
+        q, qd = self._vector("q", q), self._vector("qd", qd)
         if not (math.isfinite(q @ q) and math.isfinite(qd @ qd)):
             bad = tuple(int(j) for j in np.flatnonzero(~(np.isfinite(q) & np.isfinite(qd))))
             return self._record(t, "non_finite_state", bad, f"q = {q.tolist()}, qd = {qd.tolist()}")
@@ -208,7 +272,12 @@ class SafetyLayer:
 
     def limit(self, t: float, tau: np.ndarray) -> tuple[np.ndarray, Intervention | None]:
         """The torque the robot may receive for the controller's ``tau`` [N m], and a fault
-        (a non-finite torque; the returned torque is then the safe command at rest)."""
+        (a non-finite torque; the returned torque is then the safe command at rest).
+
+        Raises:
+            InputError: ``tau`` is not ``dof`` numbers.
+        """
+        tau = self._vector("tau", tau)
         if not math.isfinite(tau @ tau):
             fault = self._record(t, "non_finite_torque", (), f"tau = {tau.tolist()}")
             return self.safe_command(np.zeros(self.dof)), fault
@@ -247,6 +316,7 @@ class SafetyLayer:
     def safe_command(self, qd: np.ndarray) -> np.ndarray:
         """The safe torque: zero, or the damping brake ``-D qd`` within the torque limits (zero
         where ``qd`` is not finite)."""
+        qd = self._vector("qd", qd)
         if self.safe_mode == "zero":
             tau = np.zeros(self.dof)
         else:
@@ -254,6 +324,21 @@ class SafetyLayer:
             tau = np.clip(-self.damping * velocity, -self.torque_limit, self.torque_limit)
         self.last_torque = tau
         return tau
+
+    def _vector(self, field: str, value) -> np.ndarray:
+        """``value`` as the float vector of ``dof`` entries the checks need (a NaN stays: it is a
+        fault the checks report, not a bad argument)."""
+        try:
+            vector = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"{value!r} is not {self.dof} numbers", field=field) from None
+        if vector.shape != (self.dof,):
+            raise InputError(
+                f"{field} has shape {vector.shape}; the safety layer guards {self.dof} joints "
+                f"({', '.join(self.joint_names)}), so it needs ({self.dof},)",
+                field=field,
+            )
+        return vector
 
     def watchdog(self, t: float, detail: str) -> Intervention:
         """Log the watchdog's trip."""

@@ -15,7 +15,10 @@ sequence numbers) is counted. Sequence numbers are compared in serial-number ari
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..errors import InputError
+from ..validation import positive_number
 from .packet import seq_diff
 
 #: Default longest time without a state before the watchdog trips [s].
@@ -43,17 +46,27 @@ class Watchdog:
     """
 
     def __init__(self, period: float, *, deadline=None, late_budget: int = 5, silence=None):
-        if not period > 0:
-            raise InputError(f"{period} must be > 0 [s]", field="period")
+        self.period = positive_number("period", period, "a finite number > 0 [s]")
+        self.deadline = (
+            0.5 * self.period
+            if deadline is None
+            else positive_number("deadline", deadline, "a finite number > 0 [s]")
+        )
+        if isinstance(late_budget, bool) or not isinstance(late_budget, int | np.integer):
+            raise InputError(
+                f"{late_budget!r} is not a whole number; expected an integer >= 0 (late cycles "
+                "allowed in a row)",
+                field="late_budget",
+            )
         if late_budget < 0:
             raise InputError(f"{late_budget} must be >= 0", field="late_budget")
-        self.period = float(period)
-        self.deadline = 0.5 * self.period if deadline is None else float(deadline)
-        if not 0 < self.deadline:
-            raise InputError(f"{deadline} must be > 0 [s]", field="deadline")
         self.late_budget = int(late_budget)
         floor = (self.late_budget + 1) * self.period
-        self.silence = max(SILENCE, floor) if silence is None else float(silence)
+        self.silence = (
+            max(SILENCE, floor)
+            if silence is None
+            else positive_number("silence", silence, "a finite number > 0 [s]")
+        )
         self.late_cycles = 0
         self.consecutive = 0
         self.cycles = 0

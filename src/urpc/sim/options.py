@@ -42,7 +42,16 @@ class SolverOptions:
     max_state: float = 1e4
 
     def __post_init__(self) -> None:
+        # scipy.integrate.solve_ivp's methods (a class of its own is a user's choice to make)
+        known = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
+        if isinstance(self.method, str) and self.method not in known:
+            raise InputError(
+                f"unknown integration method {self.method!r}; valid: {', '.join(known)}",
+                field="method",
+            )
         for name, units in (
+            ("rtol", "relative tolerance"),
+            ("atol", "absolute tolerance"),
             ("output_rate", "Hz"),
             ("integration_step", "s"),
             ("max_state", "rad, rad/s"),

@@ -212,7 +212,7 @@ def simulate(
         )
     state0 = controller.initial_state()
     if controller_state0 is not None:
-        state0 = finite_vector("controller_state0", controller_state0, controller.n_states)
+        state0 = controller.check_state(controller_state0, "controller_state0")
     common = dict(
         controller=controller.name,
         epsilon=epsilon,
