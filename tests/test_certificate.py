@@ -524,3 +524,32 @@ def test_an_absurd_epsilon_blames_the_tube_without_numpy_warnings(rr, rr_box):
     failed = certificate.failed[0]
     assert failed.name == "inertia lower bound M_L positive definite"
     assert "over the tube" in failed.explanation and "lower epsilon" in failed.explanation
+
+
+def test_the_verdict_at_the_period_agrees_with_the_largest_period():
+    """The period search splits cells after the verdict at the controller's period: on the
+    Kinova with a narrow `urpc init` box at 15 us it then found a largest period of 25.5 us
+    while the verdict at 15 us, made on the coarser cells, said "not certified; shorten the
+    period to 25.5 us". The period is now judged again on the finer cells (certified there),
+    and whatever the configuration, a largest period at or above the period goes with a
+    certified verdict and a certified one with a largest period at or above the period."""
+    import yaml
+
+    from urpc.model.box_template import BoxTemplateSettings, box_template
+
+    robot = urpc.load_robot("kinova")
+    settings = BoxTemplateSettings(mass_relative=0.02, com_half_width=0.002, inertia_relative=0.04)
+    document = yaml.safe_load(box_template(robot, settings, robot_source="kinova"))
+    box = urpc.parse_uncertainty(document, robot)
+    reference = generic_trajectory(box.nominal_robot(robot))
+    for period in (1.5e-5, 3e-5):
+        controller = urpc.synthesize(robot, box, 0.02, sample_period=period)
+        certificate = certify(controller, reference, duration=1.0, disturbance_bound=0.1)
+        assert certificate.certified == (certificate.max_sample_period >= period), (
+            period, certificate.certified, certificate.max_sample_period,
+        )  # fmt: skip
+        if period == 1.5e-5:
+            assert certificate.certified and certificate.epsilon_floor <= 0.02
+        else:  # beyond the largest period: the advice names a shorter one
+            advice = certificate.figures.get("advice") or ""
+            assert certificate.max_sample_period < period and "shorten the period" in advice

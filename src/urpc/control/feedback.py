@@ -178,6 +178,10 @@ class ImplicitFeedback(FeedbackLaw):
         search = SampledSearch(floor_of, controller, d, progress)
         floor, parts, quantities = search.floor()
         max_period = search.max_sample_period() if math.isfinite(d) else 0.0
+        if math.isfinite(d) and search.failing_cell is None:
+            floor, parts, quantities, max_period = search.reconcile(
+                floor, parts, quantities, max_period
+            )
         if search.failing_cell is not None:  # only the inertia models were enclosed
             figures = {**floor_of.model_figures(controller.epsilon, search.extension), **parts}
         else:

@@ -52,6 +52,8 @@ class SampledSearch:
         self._enclosed: dict[tuple, dict] = {}  # (tube, T): the quantities of the last partition
         #: A cell where an inertia model fails over the tube epsilon (then no period has a floor).
         self.failing_cell: int | None = None
+        #: The quantities of the partition the period search left (None before it ran).
+        self._refined: dict | None = None
 
     def enclose(self, tube: float, T: float | None = None) -> dict:
         """The cell quantities over the tube ``||e|| <= tube`` with ``||r|| <= r_max``, raising
@@ -250,14 +252,50 @@ class SampledSearch:
                 best = max(best, longer)
                 break
             best = longer
+        self._refined = quantities
         return best
 
-    def _largest_period(self, quantities: dict) -> float:
+    def reconcile(
+        self, floor: float, parts: dict, quantities: dict, max_period: float
+    ) -> tuple[float, dict, dict, float]:
+        """The verdict at the controller's period and the largest period made to agree.
+
+        :meth:`max_sample_period` splits cells after :meth:`floor` has judged the period ``T``:
+        a largest period at or above ``T`` on the finer cells, with ``T`` itself not certified on
+        the coarser ones, read "not certified at T; shorten the period to (a longer one)". Then
+        ``T`` is judged again on the finer cells (sound: every partition is); if it is still
+        not certified there (the floor need not grow monotonically with the period), the
+        largest period is searched below ``T`` only. A certified ``T`` is never reported with
+        a shorter largest period. Returns ``(floor, parts, quantities, max_period)``."""
+        T, epsilon = self.T, self.epsilon
+        certified = floor <= epsilon
+        if certified:
+            return floor, parts, quantities, max(max_period, T)
+        refined = self._refined
+        if refined is None or max_period < T:
+            return floor, parts, quantities, max_period
+        self.say("judging the period again on the cells the period search split")
+        again, r_max = self._consistent(epsilon, refined["r_max"], T)
+        least, least_parts, rho = self.least_tube(again, T)
+        if least <= epsilon and least_parts.get("r_sup", math.inf) <= r_max:
+            basin = self.basin(again, rho)
+            least_parts.update(tube=rho, r_max=r_max, basin_tube=basin)
+            return least, least_parts, again, max(max_period, T)
+        return floor, parts, quantities, self._largest_period(again, below=T)
+
+    def _largest_period(self, quantities: dict, below: float | None = None) -> float:
+        """The largest certified period (bisection between ``1e-4`` of the cells' extension
+        and that extension, or just ``below`` a period)."""
+
         def ok(T: float) -> bool:
             floor, parts, _ = self.least_tube(quantities, T)
             return floor <= self.epsilon and parts.get("r_sup", math.inf) <= quantities["r_max"]
 
         low, high = self.extension * 1e-4, self.extension
+        if below is not None:
+            high = min(high, below * (1 - 1e-9))
+            if not high > low:
+                return 0.0
         if not ok(low):
             return 0.0
         if ok(high):
