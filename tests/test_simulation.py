@@ -460,3 +460,25 @@ def test_controller_state0_continues_a_run(rr, rr_box, true_plant):
         **kwargs,
     )
     assert restarted.diagnostics["phi"][0] == controller.phi_P < continued.diagnostics["phi"][0]
+
+
+def test_the_lightest_disturbance_pushes_at_its_bound_along_the_laws_lightest_mode():
+    """``disturbance="lightest"``: at every sample ``d_k`` has the norm of the bound and is an
+    eigenvector of the law's ``M_L(q_k)`` for its least eigenvalue (``M_L d = lambda_min d``),
+    and it keeps its direction from sample to sample (``d_k . d_(k-1) > 0``)."""
+    import urpc
+
+    robot = urpc.load_robot("rr_planar")
+    box = urpc.load_uncertainty("rr_planar", robot)
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
+    result = simulate(
+        box.plant(), controller, PaperTrajectory(), duration=0.5, disturbance_bound=3.0,
+        disturbance="lightest",
+    )  # fmt: skip
+    pushes = result.disturbance[:-1]
+    assert np.allclose(np.linalg.norm(pushes, axis=1), 3.0, rtol=1e-12)
+    for q, push in zip(result.q[:-1], pushes, strict=True):
+        lower = controller.inertia_bounds.lower(q)
+        least = np.linalg.eigvalsh(lower)[0]
+        assert np.allclose(lower @ push, least * push, atol=1e-9 * np.abs(lower).max() * 3.0)
+    assert np.all(np.sum(pushes[1:] * pushes[:-1], axis=1) > 0)

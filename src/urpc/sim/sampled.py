@@ -27,8 +27,13 @@ from .plants import Plant
 #: variable ``r = (qd_d - qd) + Kr (q_d - q)`` of the sample (``0`` where ``r = 0``); ``worst``
 #: holds ``d_k = -D M^-1 r_k / ||M^-1 r_k||`` with the plant's ``M(q_k)``: at its bound, against
 #: ``r`` in the ``M^-1`` metric (the direction that grows ``||r||`` fastest, the certificate's
-#: worst case).
-DISTURBANCES = ("ball", "against", "worst")
+#: worst case); ``lightest`` holds ``d_k = D v_k`` with ``v_k`` the unit eigenvector of the
+#: lightest mode of the law's inertia model ``M_L(q_k)`` (the plant's ``M(q_k)`` for a law
+#: without one), its sign kept from sample to sample: a constant push at the bound along the
+#: mode through which the loop rejects a disturbance worst (its steady state is the leading term
+#: of the certificate's disturbance response, ``T D / lambda_min(M_L)``; ``worst`` and
+#: ``against`` vanish where ``r = 0``, on a reference the arm follows exactly).
+DISTURBANCES = ("ball", "against", "worst", "lightest")
 
 
 def run_sampled(
@@ -58,6 +63,11 @@ def run_sampled(
     elif disturbance_model in ("against", "worst"):
         disturbance = np.zeros((samples, n))  # filled sample by sample
         Kr = np.broadcast_to(np.asarray(controller.Kr, dtype=float), (n,))
+    elif disturbance_model == "lightest":
+        disturbance = np.zeros((samples, n))  # filled sample by sample
+        bounds = getattr(controller, "inertia_bounds", None)
+        model = setup.plant.M if bounds is None else bounds.lower
+        lightest = LightestMode(model, disturbance_bound)
     else:
         raise ValueError(f"unknown disturbance model {disturbance_model!r}; valid: {DISTURBANCES}")
     stepper.reset(q, qd)
@@ -94,7 +104,9 @@ def run_sampled(
         q_series[k], qd_series[k] = q, qd
         qdes_series[k], qddes_series[k] = reference.q, reference.qd
         torque[k] = u
-        if against:
+        if disturbance_model == "lightest":
+            disturbance[k] = lightest(q)
+        elif against:
             disturbance[k] = against_r(
                 reference.q - q, reference.qd - qd, Kr, disturbance_bound,
                 setup.plant.M(q) if worst else None,
@@ -164,6 +176,24 @@ def against_r(
     if norm == 0.0:
         return np.zeros_like(r)
     return r * (-magnitude / norm)
+
+
+class LightestMode:
+    """``magnitude v(q)`` [N m], ``v`` the unit eigenvector of the least eigenvalue of
+    ``inertia(q)``, its sign chosen to keep ``v . v_previous >= 0`` (a push that holds its
+    direction as the arm moves; the first points along the positive sum of ``v``'s entries)."""
+
+    def __init__(self, inertia, magnitude: float):
+        self.inertia, self.magnitude = inertia, float(magnitude)
+        self.previous: np.ndarray | None = None
+
+    def __call__(self, q: np.ndarray) -> np.ndarray:
+        v = np.linalg.eigh(self.inertia(q))[1][:, 0]
+        reference = self.previous if self.previous is not None else np.ones_like(v)
+        if v @ reference < 0:
+            v = -v
+        self.previous = v
+        return self.magnitude * v
 
 
 def ball_samples(count: int, dimension: int, radius: float, rng: np.random.Generator) -> np.ndarray:

@@ -105,9 +105,12 @@ def simulate(
             reference at ``t = 0``.
         disturbance_bound: Radius [N m] of the ball the input disturbance is drawn from, once per
             sample (sampled runs only).
-        disturbance: ``"ball"`` (``d_k`` drawn uniformly in that ball) or ``"against"``
+        disturbance: ``"ball"`` (``d_k`` drawn uniformly in that ball), ``"against"``
             (``d_k = -disturbance_bound r_k / ||r_k||``, constant magnitude against the sliding
-            variable ``r = (qd_d - qd) + Kr (q_d - q)``, ``Kr`` the controller's).
+            variable ``r = (qd_d - qd) + Kr (q_d - q)``, ``Kr`` the controller's), ``"worst"``
+            (against ``r`` in the plant's ``M^-1`` metric) or ``"lightest"`` (at its bound along
+            the lightest mode of the law's inertia model ``M_L(q_k)``, sign held);
+            :data:`urpc.sim.sampled.DISTURBANCES`.
         seed: Seed of the disturbance generator (``numpy.random.default_rng``).
         torque_limit: Per-joint bound [N m] (scalar or ``dof`` values) the command is clipped to;
             ``None`` for no limit.
