@@ -32,6 +32,7 @@ from .trajectory_generic import (  # noqa: F401  (re-exported: their home before
     generic_trajectory,
     home_configuration,
 )
+from .validation import per_joint
 
 
 @dataclass(frozen=True)
@@ -128,19 +129,9 @@ class Trajectory(ABC):
 def _joints(value: Sequence[float] | np.ndarray, name: str) -> np.ndarray:
     """``value`` as one finite number per joint (at least one joint): what sets a reference's
     joint count."""
-    try:
-        array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(
-            f"{value!r} is not a list of numbers, one per joint [rad]", field=name
-        ) from None
-    if array.ndim > 1 or array.size == 0:
-        raise InputError(
-            f"{name} has shape {array.shape}; give one number per joint [rad]", field=name
-        )
-    array = array.reshape(-1)
-    if not np.all(np.isfinite(array)):
-        raise InputError(f"{name} must be finite, got {array.tolist()}", field=name)
+    array = per_joint(name, value, None, "rad")
+    if array.size == 0:
+        raise InputError(f"{name} is empty; give one number per joint [rad]", field=name)
     return array
 
 

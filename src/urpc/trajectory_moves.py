@@ -23,7 +23,7 @@ from .trajectories import (
     Reference,
     Trajectory,
 )
-from .validation import number_in, positive_number
+from .validation import number_in, per_joint, positive_number
 
 
 # ============================================================================ waypoints
@@ -56,19 +56,10 @@ def move_limits(dof: int, velocity_limit, acceleration_limit, minimum) -> tuple:
         ("velocity_limit", velocity_limit, "rad/s"),
         ("acceleration_limit", acceleration_limit, "rad/s^2"),
     ):
-        try:
-            array = np.array(value, dtype=float)
-        except (TypeError, ValueError):
+        array = per_joint(field, value, dof, unit, finite=False)
+        if not np.all(array > 0):
             raise InputError(
-                f"{value!r} is not a number or {dof} numbers [{unit}]", field=field
-            ) from None
-        if array.ndim == 0:
-            array = np.full(dof, float(array))
-        if array.shape != (dof,) or not np.all(array > 0):
-            raise InputError(
-                f"{value!r} must be one number or {dof} numbers (one per joint), each > 0 "
-                f"[{unit}] (inf: no limit)",
-                field=field,
+                f"{array.tolist()}: every limit must be > 0 [{unit}] (inf: no limit)", field=field
             )
         limits.append(array)
     minimum = positive_number("minimum", minimum, "a finite duration > 0 [s]")

@@ -40,6 +40,36 @@ def finite_vector(field: str, value: Any, n: int) -> np.ndarray:
     return vector
 
 
+def per_joint(
+    field: str, value, n: int | None, unit: str, *, finite: bool = True, broadcast: bool = True
+) -> np.ndarray:
+    """``value`` as a float vector of ``n`` entries (a scalar is every joint's when
+    ``broadcast``; ``n = None``: any length), not NaN, and finite when ``finite``; ``unit``
+    completes the messages.
+
+    Raises:
+        InputError: not numbers, another length, NaN or (``finite``) infinite entries (``field``
+            named).
+    """
+    try:
+        array = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(
+            f"{value!r} is not a number or a list of numbers [{unit}]", field=field
+        ) from None
+    if broadcast and array.ndim == 0 and n is not None:
+        array = np.full(n, float(array))
+    array = array.reshape(-1) if array.ndim == 0 else array
+    if array.ndim != 1 or (n is not None and array.shape != (n,)):
+        count = "one number per joint" if n is None else f"{n} numbers (one per joint)"
+        raise InputError(f"{value!r} must be {count} [{unit}]", field=field)
+    bad = np.isnan(array) | (~np.isfinite(array) if finite else False)
+    if bad.any():
+        kind = "finite" if finite else "numbers (not NaN)"
+        raise InputError(f"{array.tolist()}: every entry must be {kind} [{unit}]", field=field)
+    return array
+
+
 def positive_number(field: str, value: Any, expected: str) -> float:
     """``value`` as a finite float ``> 0``; ``expected`` completes the message
     (e.g. ``"a finite number > 0 [s]"``).

@@ -293,26 +293,24 @@ def read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
                     source=path,
                     field=f"joint.{name}.axis.xyz",
                 )
-        if limit is not None and kind != "fixed":
-            for attribute in ("effort", "velocity"):
-                value = limit.get(attribute)
+        # Bounds and dissipation are >= 0 (Pinocchio's own messages name neither joint nor field).
+        for tag, attributes, what in (
+            ("limit", ("effort", "velocity"), "{} limit ({:g}); the {} limit is a bound >= 0"),
+            (
+                "dynamics",
+                ("damping", "friction"),
+                "{} ({:g}); a joint's {} is >= 0 (it dissipates)",
+            ),
+        ):
+            element = joint.find(tag)
+            for attribute in attributes if element is not None and kind != "fixed" else ():
+                value = element.get(attribute)
                 if value is not None and float(value) < 0:
                     raise InputError(
-                        f"joint '{name}' has a negative {attribute} limit ({float(value):g}); "
-                        f"the {attribute} limit is a bound >= 0",
+                        f"joint '{name}' has a negative "
+                        + what.format(attribute, float(value), attribute),
                         source=path,
-                        field=f"joint.{name}.limit.{attribute}",
-                    )
-        dynamics = joint.find("dynamics")
-        if dynamics is not None and kind != "fixed":
-            for attribute in ("damping", "friction"):
-                value = dynamics.get(attribute)
-                if value is not None and float(value) < 0:
-                    raise InputError(
-                        f"joint '{name}' has a negative {attribute} ({float(value):g}); a "
-                        f"joint's {attribute} is >= 0 (it dissipates)",
-                        source=path,
-                        field=f"joint.{name}.dynamics.{attribute}",
+                        field=f"joint.{name}.{tag}.{attribute}",
                     )
         if kind in ("revolute", "prismatic"):
             lower, upper = (float(limit.get(end, "0")) for end in ("lower", "upper"))

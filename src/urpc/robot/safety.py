@@ -27,7 +27,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..names import SAFE_MODES
-from ..validation import number_in, positive_number
+from ..validation import number_in, per_joint, positive_number
 
 #: Interventions logged in full (all are counted).
 MAX_EVENTS = 1000
@@ -44,30 +44,6 @@ KINDS = (
 )
 #: Kinds after which the loop stops.
 FAULTS = ("non_finite_state", "position_limit", "velocity_limit", "non_finite_torque", "watchdog")
-
-
-def _per_joint(
-    field: str, value, n: int | None, unit: str, *, finite: bool = True, broadcast: bool = True
-) -> np.ndarray:
-    """``value`` as a float vector of ``n`` entries (a scalar is every joint's when
-    ``broadcast``; ``n = None``: any length), not NaN, and finite when ``finite``."""
-    try:
-        array = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(
-            f"{value!r} is not a number or a list of numbers [{unit}]", field=field
-        ) from None
-    if broadcast and array.ndim == 0 and n is not None:
-        array = np.full(n, float(array))
-    array = array.reshape(-1) if array.ndim == 0 else array
-    if array.ndim != 1 or (n is not None and array.shape != (n,)):
-        count = "one number" if n is None else f"{n} numbers (one per joint)"
-        raise InputError(f"{value!r} must be {count} [{unit}]", field=field)
-    bad = np.isnan(array) | (~np.isfinite(array) if finite else False)
-    if bad.any():
-        kind = "finite" if finite else "numbers (not NaN)"
-        raise InputError(f"{array.tolist()}: every entry must be {kind} [{unit}]", field=field)
-    return array
 
 
 @dataclass(frozen=True)
@@ -120,7 +96,7 @@ class SafetyLayer:
         damping=None,
         joint_names=None,
     ):
-        self.torque_limit = _per_joint("torque_limit", torque_limit, None, "N m", finite=False)
+        self.torque_limit = per_joint("torque_limit", torque_limit, None, "N m", finite=False)
         self.dof = n = len(self.torque_limit)
         if n == 0 or not np.all(self.torque_limit > 0):
             raise InputError(
@@ -131,7 +107,7 @@ class SafetyLayer:
         self.period = positive_number("period", period, "a finite number > 0 [s]")
         self.rate_step = None
         if torque_rate_limit is not None:
-            rate = _per_joint("torque_rate_limit", torque_rate_limit, n, "N m/s", finite=False)
+            rate = per_joint("torque_rate_limit", torque_rate_limit, n, "N m/s", finite=False)
             if not np.all(rate > 0):
                 raise InputError(f"{rate.tolist()}: must be > 0 [N m/s]", field="torque_rate_limit")
             self.rate_step = rate * self.period
@@ -148,8 +124,8 @@ class SafetyLayer:
                     f"{position_limits!r} is not a pair (lower, upper) of {n} numbers each",
                     field="position_limits",
                 ) from None
-            lower = _per_joint("position_limits", lower, n, "rad", finite=False, broadcast=False)
-            upper = _per_joint("position_limits", upper, n, "rad", finite=False, broadcast=False)
+            lower = per_joint("position_limits", lower, n, "rad", finite=False, broadcast=False)
+            upper = per_joint("position_limits", upper, n, "rad", finite=False, broadcast=False)
         self.lower = lower + self.position_margin
         self.upper = upper - self.position_margin
         closed = np.flatnonzero(~(self.lower <= self.upper))
@@ -168,7 +144,7 @@ class SafetyLayer:
         if velocity_limit is None:
             limit = np.full(n, np.inf)
         else:
-            limit = _per_joint("velocity_limit", velocity_limit, n, "rad/s", finite=False)
+            limit = per_joint("velocity_limit", velocity_limit, n, "rad/s", finite=False)
             if np.any(limit < 0):
                 raise InputError(
                     f"{limit.tolist()}: a velocity limit must be > 0 [rad/s] (0 or inf: none)",
@@ -185,7 +161,7 @@ class SafetyLayer:
         self.safe_mode = safe_mode
         if damping is None:
             damping = np.where(np.isfinite(limit), self.torque_limit / limit, 1.0)
-        self.damping = _per_joint("damping", damping, n, "N m s/rad").copy()
+        self.damping = per_joint("damping", damping, n, "N m s/rad").copy()
         if np.any(self.damping < 0):
             raise InputError(
                 f"{self.damping.tolist()}: the brake's damping must be >= 0 [N m s/rad] (a "
@@ -223,7 +199,7 @@ class SafetyLayer:
                     field="torque_limit",
                 )
             torque_limit = effort
-        torque_limit = _per_joint("torque_limit", torque_limit, robot.dof, "N m", finite=False)
+        torque_limit = per_joint("torque_limit", torque_limit, robot.dof, "N m", finite=False)
         return cls(
             torque_limit,
             period,
