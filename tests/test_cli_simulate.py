@@ -25,6 +25,7 @@ from urpc.studies.scenario import build, load_scenario, run_scenario, sample_tru
 SUMMARY_KEYS = {  # "phi", "kappa": the interval law's diagnostics
     *METRIC_NAMES, "phi", "kappa", "epsilon", "controller", "scenario", "plant", "true_parameters",
     "certified", "not_certified", "certificate", "final_error_window", "actuation_delay",
+    "disturbance_model",
 }  # fmt: skip
 TIMINGS = ("step_time_median", "wall_time")
 
@@ -72,6 +73,28 @@ def test_flags_override_the_scenario_file(capsys):
     )
     reference = run_scenario(scenario)
     assert summary["torque_variation"] == reference.metrics["torque_variation"]
+
+
+@pytest.mark.parametrize("model", ["against", "worst", "lightest"])
+def test_the_disturbance_model_flag_runs_the_adversary_at_its_bound(capsys, tmp_path, model):
+    """``--disturbance-model``: the run's disturbance has the bound's norm at every sample
+    where it acts (``against`` and ``worst`` vanish where ``r = 0``, at most the first sample
+    here, which starts on the reference), it is the in-process run of the same scenario with
+    ``disturbance_model`` set, and the summary says which."""
+    out = tmp_path / model
+    argv = ("simulate", "rr_planar/s3_ic1", "--disturbance-model", model, "--duration", "0.3",
+            "--no-certify", "--out", out)  # fmt: skip
+    summary = _json(capsys, *argv)
+    assert summary["disturbance_model"] == model
+    result = SimulationResult.load(out)
+    norms = np.linalg.norm(result.disturbance[1:-1], axis=1)
+    assert np.allclose(norms, 10.0, rtol=1e-12), norms.min()
+    scenario = load_scenario("rr_planar/s3_ic1").with_overrides(
+        disturbance_model=model, duration=0.3
+    )
+    reference = run_scenario(scenario)
+    assert np.array_equal(reference.disturbance, result.disturbance)
+    assert summary["final_error"] == reference.metrics["final_error"]
 
 
 def test_out_writes_result_files_and_figures(capsys, tmp_path):

@@ -16,6 +16,10 @@ CONTROLLERS = ("interval", "r-alpha", "computed-torque")
 BOUND_METHODS = ("hull", "vertex", "rigorous")
 #: Plants that integrate the true robot (:func:`urpc.sim.plants.make_plant`).
 PLANT_BACKENDS = ("pinocchio", "mujoco")
+#: Disturbances of a sampled run (:mod:`urpc.sim.sampled`): ``ball`` (drawn in the ball), and
+#: three at the bound: ``against`` (against ``r``), ``worst`` (against ``r`` in the plant's
+#: ``M^-1`` metric), ``lightest`` (along the lightest mode of the law's ``M_L``).
+DISTURBANCE_MODELS = ("ball", "against", "worst", "lightest")
 #: How a sampled interval controller runs: ``implicit`` (the certified sampled-data law of
 #: :mod:`urpc.control.feedback`) or ``paper`` (the paper's law unchanged under the hold).
 SAMPLED_LAWS = ("implicit", "paper")

@@ -6,6 +6,7 @@ from pathlib import Path
 
 from ..control import SAMPLED_LAWS
 from ..errors import InputError
+from ..names import DISTURBANCE_MODELS
 from ..validation import check_run_length
 from .common import (
     BOUND_METHODS,
@@ -132,6 +133,13 @@ def add_scenario_arguments(p, simulate: bool = True) -> None:
         metavar="D",
         help="bound on ||d|| [N m], drawn per sample, unknown to the controller",
     )
+    run.add_argument(
+        "--disturbance-model",
+        choices=DISTURBANCE_MODELS,
+        help="how the disturbance is drawn: ball (uniform in the ball, seeded; the default), or "
+        "at its bound: against (against r), worst (against r in the plant's M^-1 metric, the "
+        "certificate's worst case), lightest (along the lightest mode of the law's M_L)",
+    )
     run.add_argument("--duration", metavar="S", help="simulated time [s]")
     run.add_argument(
         "--actuation-delay",
@@ -201,6 +209,7 @@ def run_simulate(args) -> int:
         "scenario": scenario.name,
         "plant": result.info["plant"],
         "actuation_delay": result.info["actuation_delay"],
+        "disturbance_model": result.info.get("disturbance_model"),
         "true_parameters": {
             "description": setup.true_description,
             "values": result.info["true_parameters"],
@@ -265,6 +274,7 @@ def scenario_from_arguments(args):
         epsilon=args.epsilon,
         sample_period="continuous" if args.continuous else args.sample_period,
         disturbance=args.disturbance,
+        disturbance_model=args.disturbance_model,
         duration=args.duration,
         seed=args.seed,
         torque_limit=torque_limit,
@@ -288,8 +298,10 @@ def _print_summary(
             timing += f", actuation delay {count(delay, 'sample')}"
     if result.disturbance_bound > 0:
         known = setup.box.disturbance_bound is not None
+        model = scenario.disturbance_model
+        drawn = "drawn in the ball" if model == "ball" else f"at its bound, {model}"
         timing += (
-            f", disturbance ||d|| <= {result.disturbance_bound:g} {force} "
+            f", disturbance ||d|| <= {result.disturbance_bound:g} {force} {drawn} "
             f"({'bound known' if known else 'unknown'} to the controller)"
         )
     else:

@@ -38,6 +38,7 @@ from .values import Count, NonNegative, Number, Positive, Text, Vector, either
 # The fixed sets, from the one place that names them (urpc.names).
 ControllerName = Literal[names.CONTROLLERS]
 PlantBackend = Literal[names.PLANT_BACKENDS]
+DisturbanceModel = Literal[names.DISTURBANCE_MODELS]
 TrajectoryKind = Literal[names.TRAJECTORY_KINDS]
 
 
@@ -274,6 +275,12 @@ class Scenario(FileFormat):
     )
     disturbance: NonNegative("N m") = Field(
         0.0, description="bound on ||d|| [N m], drawn per sample"
+    )
+    disturbance_model: DisturbanceModel = Field(
+        "ball",
+        description="ball (drawn uniformly in ||d|| <= bound, seeded), or at the bound: against "
+        "(against r), worst (against r in the plant's M^-1 metric), lightest (along the lightest "
+        "mode of the law's M_L)",
     )
     epsilon: Positive("rad") = Field(1e-2, description="required ||q_d - q|| < epsilon [rad]")
     controller: ControllerName = Field("interval", description="the controller that runs")

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import SimulationError
+from ..names import DISTURBANCE_MODELS
 from .closed_loop import RunSetup, diverged
 from .plants import Plant
 
@@ -33,7 +34,7 @@ from .plants import Plant
 #: mode through which the loop rejects a disturbance worst (its steady state is the leading term
 #: of the certificate's disturbance response, ``T D / lambda_min(M_L)``; ``worst`` and
 #: ``against`` vanish where ``r = 0``, on a reference the arm follows exactly).
-DISTURBANCES = ("ball", "against", "worst", "lightest")
+DISTURBANCES = DISTURBANCE_MODELS
 
 
 def run_sampled(

@@ -256,6 +256,8 @@ def simulate(
     finally:
         bar.close()
     info["actuation_delay"] = delay
+    if sample_period is not None:
+        info["disturbance_model"] = disturbance
     # The robot, so that the result can be replayed later (SimulationResult.replay).
     info["robot"] = {
         "name": plant.name,

@@ -124,6 +124,7 @@ def simulate_setup(
         q0=setup.q0,
         qd0=setup.qd0,
         disturbance_bound=scenario.disturbance,
+        disturbance=scenario.disturbance_model,
         seed=scenario.seed,
         torque_limit=setup.torque_limit,
         epsilon=scenario.epsilon,
