@@ -326,3 +326,7 @@ def test_the_valid_calls_next_to_them_still_work(rr):
     point = {"link2": np.r_[0.0, box.links[0].nominal[1:]]}  # a massless body is physical
     assert box.plant(point).dof == 2
     assert controller.check_state([0.5]).tolist() == [0.5]
+    symmetric = SafetyLayer([10, 10], 1e-3, position_limits=(-3.0, 3.0))  # one pair for all
+    assert symmetric.lower.tolist() == [-2.98, -2.98] and symmetric.upper.tolist() == [2.98] * 2
+    unbounded = SafetyLayer.for_robot(robot, 1e-3, torque_limit=np.inf)  # brake's default D: 1
+    assert unbounded.damping.tolist() == [1.0, 1.0]

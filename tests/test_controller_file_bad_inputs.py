@@ -267,6 +267,14 @@ def _scenario(tmp_path, edit):
             "has sampled_law = implicit, but {} states sampled_law: paper",
         ),
         (lambda d, b: d["controller_options"]["interval"].__setitem__("Kr", 30), None),
+        (  # a diagonal matrix, as synthesize takes it
+            lambda d, b: d["controller_options"]["interval"].__setitem__("Kr", [[30, 0], [0, 30]]),
+            None,
+        ),
+        (
+            lambda d, b: d["controller_options"]["interval"].__setitem__("Kr", [[30, 0], [0, 20]]),
+            "has Kr = [30, 30], but {} states Kr: [[30, 0], [0, 20]]",
+        ),
     ],
     ids=[
         "same",
@@ -278,6 +286,8 @@ def _scenario(tmp_path, edit):
         "Kr",
         "sampled_law",
         "same_Kr_as_a_scalar",
+        "same_Kr_as_a_matrix",
+        "Kr_matrix",
     ],  # fmt: skip
 )
 def test_run_refuses_a_saved_controller_whose_numbers_are_not_the_scenarios(
@@ -298,3 +308,17 @@ def test_run_refuses_a_saved_controller_whose_numbers_are_not_the_scenarios(
     else:
         assert words.format(scenario) in lines[0], lines[0]
         assert str(path) in lines[0]
+
+
+def test_run_compares_only_the_law_the_scenario_states(tmp_path, capsys):
+    """A controller saved with the paper's law, run with a scenario that states no law: the
+    synthesis default (implicit) is not the scenario's word, so nothing is refused."""
+    robot = urpc.load_robot("rr_planar")
+    box = urpc.load_uncertainty("rr_planar", robot)
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3, sampled_law="paper")
+    path = controller.save(tmp_path / "paper.json")
+    scenario = _scenario(tmp_path, lambda d, b: None)  # sampled_law removed from the file
+    code, err, lines = _cli(
+        capsys, "run", scenario, "--robot-address", "udp://127.0.0.1:9", "--controller", str(path),
+    )  # fmt: skip
+    assert code == 2 and len(lines) == 1 and "no state from the robot" in lines[0], err

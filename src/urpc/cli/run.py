@@ -122,13 +122,15 @@ def register(commands) -> None:
 
 def _shown(value) -> str:
     """A number or a list of numbers as it reads in a scenario file (``[30, 20]``, ``1e+06``)."""
+    import numpy as np
+
     if isinstance(value, str):
         return value
-    try:
-        values = [float(v) for v in value]
-    except TypeError:
-        return f"{float(value):g}"
-    return "[" + ", ".join(f"{v:g}" for v in values) + "]"
+    array = np.asarray(value, dtype=float)
+    if array.ndim == 0:
+        return f"{float(array):g}"
+    rows = [", ".join(f"{v:g}" for v in row) for row in np.atleast_2d(array)]
+    return "[" + ", ".join(rows) + "]" if array.ndim == 1 else "[[" + "], [".join(rows) + "]]"
 
 
 def _check_saved_against_scenario(controller, scenario, box, path, *, law_given: bool) -> None:
@@ -147,7 +149,6 @@ def _check_saved_against_scenario(controller, scenario, box, path, *, law_given:
 
     from ..control.certificate_key import canonical
     from ..errors import InputError
-    from ..studies.scenario.run import interval_synthesis_options
 
     where = scenario.source or scenario.name
     redo = "synthesize the controller again (drop --controller, add --save-controller)"
@@ -162,7 +163,8 @@ def _check_saved_against_scenario(controller, scenario, box, path, *, law_given:
                 path,
                 name,
             )
-    stated = interval_synthesis_options(scenario)
+    # What the scenario states (its own entries, not the synthesis defaults filled in).
+    stated = scenario.controller_options.by_controller()["interval"]
     saved_values = {
         "kappa_P": controller.kappa_P,
         "kappa_I": controller.kappa_I,
@@ -178,6 +180,10 @@ def _check_saved_against_scenario(controller, scenario, box, path, *, law_given:
             continue
         if isinstance(saved, np.ndarray):
             wanted_array = np.asarray(wanted, dtype=float)
+            if wanted_array.ndim == 2 and wanted_array.shape == (saved.size, saved.size):
+                # a diagonal matrix (as synthesize takes it): its diagonal, if nothing else
+                off = wanted_array - np.diag(np.diag(wanted_array))
+                wanted_array = np.diag(wanted_array) if not off.any() else wanted_array
             same = wanted_array.size in (1, saved.size) and bool(
                 np.all(np.broadcast_to(wanted_array.ravel(), saved.shape) == saved)
             )

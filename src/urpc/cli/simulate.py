@@ -133,13 +133,6 @@ def add_scenario_arguments(p, simulate: bool = True) -> None:
         metavar="D",
         help="bound on ||d|| [N m], drawn per sample, unknown to the controller",
     )
-    run.add_argument(
-        "--disturbance-model",
-        choices=DISTURBANCE_MODELS,
-        help="how the disturbance is drawn: ball (uniform in the ball, seeded; the default), or "
-        "at its bound: against (against r), worst (against r in the plant's M^-1 metric, the "
-        "certificate's worst case), lightest (along the lightest mode of the law's M_L)",
-    )
     run.add_argument("--duration", metavar="S", help="simulated time [s]")
     run.add_argument(
         "--actuation-delay",
@@ -151,9 +144,19 @@ def add_scenario_arguments(p, simulate: bool = True) -> None:
         "actuation_delay, else the law's own delay (--delay, else 0). The certificate covers "
         "no delay: a configuration with one is not certified",
     )
-    if not simulate:
-        p.set_defaults(true_params=None, controller=None, plant=None, seed=None, torque_limit=None)
+    if not simulate:  # (the certificate bounds every disturbance: no model to choose)
+        p.set_defaults(
+            true_params=None, controller=None, plant=None, seed=None, torque_limit=None,
+            disturbance_model=None,
+        )  # fmt: skip
         return
+    run.add_argument(
+        "--disturbance-model",
+        choices=DISTURBANCE_MODELS,
+        help="how the disturbance is drawn: ball (uniform in the ball, seeded; the default), or "
+        "at its bound: against (against r), worst (against r in the plant's M^-1 metric, the "
+        "certificate's worst case), lightest (along the lightest mode of the law's M_L)",
+    )
     source.add_argument(
         "--true-params",
         metavar="FILE",

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import copy
 import warnings
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -118,11 +117,10 @@ def parse_uncertainty(document: Any, robot: Robot, source: str | None = None) ->
             ("this box is for robot X").
     """
     check_type("robot", robot, Robot, "a Robot (urpc.load_robot(...))")
-    if not isinstance(document, Mapping):
+    if document is None:  # (other non-mappings: the format's own message, key: value lines)
         raise InputError(
-            f"expected a mapping with 'links' (and optionally 'payload', 'joints', "
-            f"'disturbance'), got {type(document).__name__}; {{'links': {{}}}} says every "
-            "parameter is exact",
+            "expected a mapping with 'links' (and optionally 'payload', 'joints', "
+            "'disturbance'), got None; {'links': {}} says every parameter is exact",
             source=source,
             field="document",
         )

@@ -124,8 +124,8 @@ class SafetyLayer:
                     f"{position_limits!r} is not a pair (lower, upper) of {n} numbers each",
                     field="position_limits",
                 ) from None
-            lower = per_joint("position_limits", lower, n, "rad", finite=False, broadcast=False)
-            upper = per_joint("position_limits", upper, n, "rad", finite=False, broadcast=False)
+            lower = per_joint("position_limits", lower, n, "rad", finite=False)
+            upper = per_joint("position_limits", upper, n, "rad", finite=False)
         self.lower = lower + self.position_margin
         self.upper = upper - self.position_margin
         closed = np.flatnonzero(~(self.lower <= self.upper))
@@ -159,8 +159,9 @@ class SafetyLayer:
                 field="safe_mode",
             )
         self.safe_mode = safe_mode
-        if damping is None:
-            damping = np.where(np.isfinite(limit), self.torque_limit / limit, 1.0)
+        if damping is None:  # full torque at full speed; 1 where either is unlimited
+            finite = np.isfinite(limit) & np.isfinite(self.torque_limit)
+            damping = np.where(finite, self.torque_limit / np.where(finite, limit, 1.0), 1.0)
         self.damping = per_joint("damping", damping, n, "N m s/rad").copy()
         if np.any(self.damping < 0):
             raise InputError(

@@ -134,6 +134,7 @@ class CampaignResult:
             "duration": scenario.duration,
             "sample_period": scenario.sample_period,
             "disturbance": scenario.disturbance,
+            "disturbance_model": scenario.disturbance_model,
             "seed": self.seed,
             "runs": self.runs,
             "met": sum(r["met"] for r in rows),

@@ -149,9 +149,12 @@ def campaign_settings(
     scenario: Scenario, runs: int, seed: int, ic_spread: float, vertex_runs: int | None
 ) -> dict[str, Any]:
     """What determines a campaign's runs (a resumed campaign must have the same)."""
+    document = json.loads(json.dumps(scenario.to_dict(), sort_keys=True))
+    if document.get("disturbance_model") == "ball":  # the default: records made before it match
+        del document["disturbance_model"]
     return {
         "urpc": __version__,
-        "scenario": json.loads(json.dumps(scenario.to_dict(), sort_keys=True)),
+        "scenario": document,
         "scenario_file": None if scenario.source is None else str(scenario.source),
         "runs": runs,
         "seed": seed,
