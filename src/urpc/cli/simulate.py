@@ -212,7 +212,9 @@ def run_simulate(args) -> int:
         "scenario": scenario.name,
         "plant": result.info["plant"],
         "actuation_delay": result.info["actuation_delay"],
-        "disturbance_model": result.info.get("disturbance_model"),
+        "disturbance_model": result.info.get(
+            "disturbance_model", None if result.sample_period is None else "ball"
+        ),
         "true_parameters": {
             "description": setup.true_description,
             "values": result.info["true_parameters"],

@@ -256,7 +256,7 @@ def simulate(
     finally:
         bar.close()
     info["actuation_delay"] = delay
-    if sample_period is not None:
+    if sample_period is not None and disturbance != "ball":  # the default records nothing new
         info["disturbance_model"] = disturbance
     # The robot, so that the result can be replayed later (SimulationResult.replay).
     info["robot"] = {
