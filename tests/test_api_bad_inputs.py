@@ -92,7 +92,7 @@ CASES = {
     "watchdog_nan_budget": (
         lambda r, b, c: Watchdog(1e-3, late_budget=float("nan")),
         "late_budget",
-        "whole number",
+        "must be an integer >= 0",
     ),
     # the loop: its epsilon judges met, its period must be the law's
     "loop_negative_epsilon": (
@@ -118,12 +118,12 @@ CASES = {
     "loop_infinite_time": (
         lambda r, b, c: ControlLoop(c, urpc.PaperTrajectory()).step(float("inf"), Z, Z),
         "t",
-        "not a finite time",
+        "expected a finite time [s]",
     ),
     "loop_text_time": (
         lambda r, b, c: ControlLoop(c, urpc.PaperTrajectory()).step("0", Z, Z),
         "t",
-        "not a finite time",
+        "expected a finite time [s]",
     ),
     "loop_result_before_a_step": (
         lambda r, b, c: ControlLoop(c, urpc.PaperTrajectory()).result(),

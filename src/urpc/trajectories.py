@@ -135,24 +135,6 @@ def _joints(value: Sequence[float] | np.ndarray, name: str) -> np.ndarray:
     return array
 
 
-def _vector(value: float | Sequence[float] | np.ndarray, dof: int, name: str) -> np.ndarray:
-    try:
-        array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{value!r} is not a number or {dof} numbers", field=name) from None
-    if array.ndim == 0:
-        if not np.isfinite(array):
-            raise InputError(f"{name} must be finite, got {float(array)}", field=name)
-        return np.full(dof, float(array))
-    if array.shape != (dof,):
-        raise InputError(
-            f"{name} has shape {array.shape}, expected ({dof},) or a scalar", field=name
-        )
-    if not np.all(np.isfinite(array)):
-        raise InputError(f"{name} must be finite, got {array.tolist()}", field=name)
-    return array.copy()
-
-
 class PaperTrajectory(Trajectory):
     """``q_d(t) = amplitude * sin(pi t / 2) sin(pi t)`` (Giusti & Althoff, Sec. IV-A).
 
@@ -220,9 +202,9 @@ class SinusoidTrajectory(Trajectory):
     def __init__(self, home, amplitude, frequency, phase=0.0):
         self.home = _joints(home, "home")
         self.dof = len(self.home)
-        self.amplitude = _vector(amplitude, self.dof, "amplitude")
-        self.frequency = _vector(frequency, self.dof, "frequency")
-        self.phase = _vector(phase, self.dof, "phase")
+        self.amplitude = per_joint("amplitude", amplitude, self.dof, "rad")
+        self.frequency = per_joint("frequency", frequency, self.dof, "Hz")
+        self.phase = per_joint("phase", phase, self.dof, "rad")
         if np.any(self.frequency < 0):
             raise InputError(
                 f"frequency must be >= 0 [Hz], got {self.frequency}", field="frequency"

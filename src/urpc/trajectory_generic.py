@@ -63,7 +63,8 @@ def generic_trajectory(
     Raises:
         InputError: unknown ``kind`` or out-of-range fractions, or a home outside the limits.
     """
-    from .trajectories import QUINTIC_PEAK_VELOCITY, QuinticTrajectory, SinusoidTrajectory, _vector
+    from .trajectories import QUINTIC_PEAK_VELOCITY, QuinticTrajectory, SinusoidTrajectory
+    from .validation import per_joint
 
     _check_robot(robot)
     if kind not in ("sinusoid", "quintic"):
@@ -79,7 +80,9 @@ def generic_trajectory(
     if not (frequency > 0 and segment_duration > 0):
         raise InputError("frequency and segment_duration must be > 0", field="frequency")
     lower, upper = robot.position_limits
-    center = home_configuration(robot) if home is None else _vector(home, robot.dof, "home")
+    center = (
+        home_configuration(robot) if home is None else per_joint("home", home, robot.dof, "rad")
+    )
     if np.any(center < lower) or np.any(center > upper):
         raise InputError(f"home {center.tolist()} lies outside the joint limits", field="home")
     margin = np.minimum(center - lower, upper - center)

@@ -62,12 +62,26 @@ def per_joint(
     array = array.reshape(-1) if array.ndim == 0 else array
     if array.ndim != 1 or (n is not None and array.shape != (n,)):
         count = "one number per joint" if n is None else f"{n} numbers (one per joint)"
-        raise InputError(f"{value!r} must be {count} [{unit}]", field=field)
+        raise InputError(
+            f"{value!r} has shape {array.shape}; it must be {count} [{unit}]", field=field
+        )
     bad = np.isnan(array) | (~np.isfinite(array) if finite else False)
     if bad.any():
         kind = "finite" if finite else "numbers (not NaN)"
         raise InputError(f"{array.tolist()}: every entry must be {kind} [{unit}]", field=field)
     return array
+
+
+def checked_count(name: str, value: Any, minimum: int, note: str = "") -> int:
+    """``value`` as an ``int >= minimum`` (a bool or a float is not a count); ``note`` completes
+    the message (``" (late cycles allowed in a row)"``).
+
+    Raises:
+        InputError: not an integer, or below ``minimum`` (``name`` named).
+    """
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+        raise InputError(f"{value!r} must be an integer >= {minimum}{note}", field=name)
+    return int(value)
 
 
 def positive_number(field: str, value: Any, expected: str) -> float:

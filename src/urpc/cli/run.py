@@ -148,6 +148,7 @@ def _check_saved_against_scenario(controller, scenario, box, path, *, law_given:
     import numpy as np
 
     from ..control.certificate_key import canonical
+    from ..control.synthesis import gain_diagonal
     from ..errors import InputError
 
     where = scenario.source or scenario.name
@@ -178,15 +179,11 @@ def _check_saved_against_scenario(controller, scenario, box, path, *, law_given:
         wanted = stated.get(name)
         if wanted is None or (name == "sampled_law" and law_given):
             continue
-        if isinstance(saved, np.ndarray):
-            wanted_array = np.asarray(wanted, dtype=float)
-            if wanted_array.ndim == 2 and wanted_array.shape == (saved.size, saved.size):
-                # a diagonal matrix (as synthesize takes it): its diagonal, if nothing else
-                off = wanted_array - np.diag(np.diag(wanted_array))
-                wanted_array = np.diag(wanted_array) if not off.any() else wanted_array
-            same = wanted_array.size in (1, saved.size) and bool(
-                np.all(np.broadcast_to(wanted_array.ravel(), saved.shape) == saved)
-            )
+        if name == "Kr":  # a scalar, a vector or a diagonal matrix, as synthesize reads it
+            try:
+                same = np.array_equal(gain_diagonal(wanted, controller.epsilon, saved.size), saved)
+            except InputError:  # not a gain synthesize takes: not the saved one either
+                same = False
         else:
             same = saved == wanted
         if not same:

@@ -36,7 +36,7 @@ import numpy as np
 from ..errors import InputError
 from ..jsonsafe import jsonable, non_finite_paths, restore_non_finite
 from ..trajectories import Trajectory
-from ..validation import check_trajectory_dof, number_in, positive_number
+from ..validation import check_trajectory_dof, checked_count, number_in, positive_number
 from ..wording import count
 from .argument import Condition
 from .base import actuation_delay_of
@@ -185,14 +185,8 @@ def certify(
             "disturbance_bound", disturbance_bound, "a finite number >= 0 [N m]", lambda x: x >= 0
         )
     d = box.disturbance_bound if disturbance_bound is None else float(disturbance_bound)
-    if cells is not None and (
-        isinstance(cells, bool) or not isinstance(cells, int | np.integer) or cells < 1
-    ):
-        raise InputError(
-            f"{cells!r} is not a number of cells; expected an integer >= 1, or None (chosen from "
-            "the reference's speed)",
-            field="cells",
-        )
+    if cells is not None:
+        checked_count("cells", cells, 1, ", or None (chosen from the reference's speed)")
     conditions = controller.gain_law.conditions()
     law_delay = int(controller.delay)
     delay = max(law_delay, actuation_delay_of(controller, actuation_delay))

@@ -77,7 +77,7 @@ def synthesize(
     phi_P = number_in("phi_P", phi_P, "a finite number >= 1 (Theorem 1)", lambda x: x >= 1)
     kappa_I = number_in("kappa_I", kappa_I, "a finite number > 0 (Theorem 2)", lambda x: x > 0)
     phi_I = number_in("phi_I", phi_I, "a finite number > 0 (Theorem 2)", lambda x: x > 0)
-    gains = _gain_matrix(Kr, epsilon, robot.dof)
+    gains = gain_diagonal(Kr, epsilon, robot.dof)
     sample_period = sample_period_of(sample_period)
     if sampled_law not in SAMPLED_LAWS:
         raise InputError(
@@ -113,8 +113,12 @@ def synthesize(
     )
 
 
-def _gain_matrix(Kr, epsilon: float, dof: int) -> np.ndarray:
-    """The diagonal of ``Kr`` [1/s] (length ``dof``)."""
+def gain_diagonal(Kr, epsilon: float, dof: int) -> np.ndarray:
+    """The diagonal of ``Kr`` [1/s] (length ``dof``) as :func:`synthesize` takes it: ``None``
+    (``3 / sqrt(epsilon)``), a scalar, ``dof`` numbers or a diagonal matrix.
+
+    Raises:
+        InputError: anything else (field ``Kr``)."""
     if Kr is None:
         return np.full(dof, 3.0 / math.sqrt(epsilon))
     expected = f"a scalar, {dof} numbers or a diagonal {dof}x{dof} matrix, all finite and > 0 [1/s]"

@@ -22,7 +22,7 @@ import numpy as np
 from ..control.base import Controller
 from ..errors import InputError
 from ..trajectories import Trajectory
-from ..validation import check_trajectory_dof, positive_number
+from ..validation import check_trajectory_dof, checked_count, number_in, positive_number
 
 #: Rows the log holds before it doubles.
 DEFAULT_CAPACITY = 16_384
@@ -135,13 +135,7 @@ class ControlLoop:
                 field="diagnostic_units",
             )
         self.diagnostic_units: dict[str, str] = units
-        if isinstance(capacity, bool) or not isinstance(capacity, int | np.integer):
-            raise InputError(
-                f"{capacity!r} is not a whole number; expected the log's initial rows, an "
-                "integer >= 1",
-                field="capacity",
-            )
-        self._capacity = max(16, int(capacity))
+        self._capacity = max(16, checked_count("capacity", capacity, 1, " (the log's rows)"))
         self.reset()
 
     def reset(self) -> None:
@@ -189,7 +183,7 @@ class ControlLoop:
         (:meth:`filter_velocity`), logged as ``qd_filtered`` next to the measured ``qd``."""
         tic = self._clock()
         if not (type(t) is float and math.isfinite(t)):  # noqa: E721 (exact type: the fast path)
-            t = self._time(t)
+            t = number_in("t", t, "a finite time [s]", lambda x: True)
         controller, state = self.controller, self.state
         measured = qd
         if self._omega is not None:
@@ -251,18 +245,6 @@ class ControlLoop:
         :attr:`diagnostic_units` (the controller's diagnostics, ``rho_norm`` when it reports
         it)."""
         return {name: array[: self.samples].copy() for name, array in self._log.items()}
-
-    @staticmethod
-    def _time(t) -> float:
-        """``t`` as a finite float [s], or one error naming it."""
-        if not isinstance(t, str | bytes | bool):
-            try:
-                value = float(t)
-            except (TypeError, ValueError):
-                value = math.nan
-            if math.isfinite(value):
-                return value
-        raise InputError(f"{t!r} is not a finite time [s]", field="t")
 
     def step_time_percentiles(self) -> dict[str, float]:
         """p50, p99, p99.9 and max of the step time [s]."""

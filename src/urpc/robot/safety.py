@@ -162,7 +162,7 @@ class SafetyLayer:
         if damping is None:  # full torque at full speed; 1 where either is unlimited
             finite = np.isfinite(limit) & np.isfinite(self.torque_limit)
             damping = np.where(finite, self.torque_limit / np.where(finite, limit, 1.0), 1.0)
-        self.damping = per_joint("damping", damping, n, "N m s/rad").copy()
+        self.damping = per_joint("damping", damping, n, "N m s/rad")
         if np.any(self.damping < 0):
             raise InputError(
                 f"{self.damping.tolist()}: the brake's damping must be >= 0 [N m s/rad] (a "

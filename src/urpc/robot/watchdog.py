@@ -15,10 +15,7 @@ sequence numbers) is counted. Sequence numbers are compared in serial-number ari
 
 from __future__ import annotations
 
-import numpy as np
-
-from ..errors import InputError
-from ..validation import positive_number
+from ..validation import checked_count, positive_number
 from .packet import seq_diff
 
 #: Default longest time without a state before the watchdog trips [s].
@@ -52,15 +49,9 @@ class Watchdog:
             if deadline is None
             else positive_number("deadline", deadline, "a finite number > 0 [s]")
         )
-        if isinstance(late_budget, bool) or not isinstance(late_budget, int | np.integer):
-            raise InputError(
-                f"{late_budget!r} is not a whole number; expected an integer >= 0 (late cycles "
-                "allowed in a row)",
-                field="late_budget",
-            )
-        if late_budget < 0:
-            raise InputError(f"{late_budget} must be >= 0", field="late_budget")
-        self.late_budget = int(late_budget)
+        self.late_budget = checked_count(
+            "late_budget", late_budget, 0, " (late cycles allowed in a row)"
+        )
         floor = (self.late_budget + 1) * self.period
         self.silence = (
             max(SILENCE, floor)

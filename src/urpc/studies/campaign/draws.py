@@ -20,6 +20,7 @@ from ...model.parameter_point import (
 )
 from ...model.point import JOINTS, ParameterPoint
 from ...model.uncertainty import ParameterBox
+from ...validation import checked_count
 from ...wording import count
 from ..scenario import ScenarioSetup
 
@@ -154,9 +155,3 @@ def _consistent_draw(
     box: ParameterBox, rng: np.random.Generator
 ) -> tuple[dict[str, np.ndarray], int]:
     return sample_rigid_point(box, rng, MAX_DRAWS)
-
-
-def checked_count(name: str, value: Any, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
-        raise InputError(f"{value!r} must be an integer >= {minimum}", field=name)
-    return int(value)

@@ -16,10 +16,11 @@ from ...atomic import check_writable
 from ...control.certificate_cache import CertificateCache
 from ...errors import InputError
 from ...model.parameter_box import JOINTS
+from ...validation import checked_count
 from ..certification import guarantee_of
 from ..pool import submit_all, worker_pool
 from ..scenario import Scenario, build, build_controller, load_scenario
-from .draws import checked_count, draw_runs
+from .draws import draw_runs
 from .progress import CampaignProgress
 from .result import CampaignResult
 from .store import LOCK_NAME, STORE_NAME, CampaignStore
