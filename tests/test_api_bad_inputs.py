@@ -137,6 +137,14 @@ CASES = {
         "q",
         "",
     ),
+    "delayed_law_nan_velocity": (
+        lambda r, b, c: urpc.synthesize(r, b, 1e-2, sample_period=1e-3, delay=1).output(
+            0.0, Z, np.array([0.0, np.nan]), urpc.PaperTrajectory().reference(0.0),
+            np.zeros(3),
+        ),
+        "qd",
+        "[ 0. nan]",
+    ),
     # references: NaN, empty, 2-D or textual joints; non-positive limits and durations
     "paper_nan_amplitude": (
         lambda r, b, c: urpc.PaperTrajectory([np.nan, 0.1]),

@@ -87,7 +87,10 @@ class DelayedIntervalController(IntervalPassivityController):
             np.asarray(x, dtype=float) for x in (reference.q, reference.qd, reference.qdd)
         )
         ahead = Reference(rq + T * rqd + (0.5 * T * T) * rqdd, rqd + T * rqdd, rqdd)
-        torque = super().output(t + T, q_next, qd_next, ahead, state[:k])
+        try:
+            torque = super().output(t + T, q_next, qd_next, ahead, state[:k])
+        except InputError as exc:  # a non-finite sample: name the caller's vector
+            raise self.state_error(q, qd, reference) or exc from None
         self._cache = (t, id(state), torque)
         return torque
 
