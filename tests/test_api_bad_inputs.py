@@ -139,7 +139,10 @@ CASES = {
     ),
     "delayed_law_nan_velocity": (
         lambda r, b, c: urpc.synthesize(r, b, 1e-2, sample_period=1e-3, delay=1).output(
-            0.0, Z, np.array([0.0, np.nan]), urpc.PaperTrajectory().reference(0.0),
+            0.0,
+            Z,
+            np.array([0.0, np.nan]),
+            urpc.PaperTrajectory().reference(0.0),
             np.zeros(3),
         ),
         "qd",

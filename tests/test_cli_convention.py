@@ -340,6 +340,10 @@ def test_prismatic_joints_are_reported_in_m_and_n(capsys, tmp_path):
     assert result.info["joint_kinds"] == ["prismatic", "prismatic"]
     figures = result.plot()
     assert [a.get_ylabel() for a in figures["torque"].axes] == ["$u_{1}$ [N]", "$u_{2}$ [N]"]
+    error_axes = figures["error"].axes[0]
+    assert error_axes.get_ylabel() == "$\\|e\\|$ [m]"
+    assert "$\\varepsilon$ = 0.01 m" in error_axes.get_legend_handles_labels()[1]
+    assert figures["trajectory"].axes[0].get_ylabel() == "joint position [m]"
 
 
 def test_one_link_reads_one_link(capsys, tmp_path):

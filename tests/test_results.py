@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
+import urpc
 from urpc.control.base import Reference
 from urpc.control.synthesis import synthesize
 from urpc.errors import InputError
@@ -196,6 +197,27 @@ def test_plot_returns_labelled_headless_figures(result, tmp_path):
         "$\\kappa$ [s/rad]",
     ]
     assert "[rad]" in figures["trajectory"].axes[0].get_ylabel()
+
+
+def test_a_pushed_disturbance_is_named_in_the_titles(rr, rr_box):
+    """A run under a disturbance other than the default ball says which in every title (a
+    figure of a worst-case push must not read like a random one); the ball adds nothing."""
+    from urpc.sim.plotting import describe
+
+    controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=1e-3)
+    runs = {
+        model: urpc.simulate(
+            rr, controller, urpc.PaperTrajectory(), duration=0.05, disturbance_bound=1.0,
+            disturbance=model,
+        )
+        for model in ("ball", "worst", "lightest")
+    }  # fmt: skip
+    assert describe(runs["ball"]).endswith("||d|| <= 1 N m")
+    assert describe(runs["worst"]).endswith("||d|| <= 1 N m (at the bound, against r)")
+    for name, figure in runs["lightest"].plot().items():
+        title = figure.get_suptitle() or figure.axes[0].get_title()
+        assert "along the lightest mode" in title, name
+    assert runs["lightest"].info["joint_kinds"] == list(rr.joint_kinds)
 
 
 def test_compare_overlays_runs(result, tmp_path):

@@ -298,6 +298,9 @@ class ControlLoop:
     def _units_info(self) -> dict[str, Any]:
         units = self.controller.diagnostic_units
         info: dict[str, Any] = {"diagnostic_units": dict(units)} if units else {}
+        robot = self.controller.robot
+        if robot is not None:
+            info["joint_kinds"] = list(robot.joint_kinds)  # units: rad, N m or m, N per joint
         if self._omega is not None:
             info["velocity_filter_hz"] = self.velocity_filter_hz
         return info

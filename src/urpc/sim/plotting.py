@@ -68,8 +68,19 @@ def describe(result: Run) -> str:
     parts = [result.scenario] if result.scenario else []
     parts += [result.controller, timing]
     if result.disturbance_bound:
-        parts.append(f"||d|| <= {result.disturbance_bound:g} N m")
+        model = (getattr(result, "info", None) or {}).get("disturbance_model")
+        pushed = f" ({DISTURBANCE_WORDS.get(model, model)})" if model else ""
+        parts.append(f"||d|| <= {result.disturbance_bound:g} N m{pushed}")
     return ", ".join(parts)
+
+
+#: How a title names a disturbance model other than the default ball
+#: (``info["disturbance_model"]``, :data:`urpc.names.DISTURBANCE_MODELS`).
+DISTURBANCE_WORDS = {
+    "against": "against r",
+    "worst": "at the bound, against r",
+    "lightest": "at the bound, along the lightest mode",
+}
 
 
 #: Past this many legend entries (8 joints with their references) the legend goes beside the
@@ -102,7 +113,7 @@ def plot_trajectory(result: Run, *, actual: bool = True) -> Figure:
             axes.plot(
                 result.t, result.q[:, i], ls="--", color=line.get_color(), label=f"$q_{{{i + 1}}}$"
             )
-    axes.set(xlabel="time [s]", ylabel="joint position [rad]")
+    axes.set(xlabel="time [s]", ylabel=f"joint position [{position_unit(result)}]")
     axes.set_title(f"Trajectory - {describe(result)}")
     axes.grid(True, alpha=0.3)
     _joint_legend(axes, ncol=2)
@@ -278,7 +289,7 @@ def compare(
         ax = axes[i + 1]
         for result, label in zip(results, labels, strict=True):
             ax.plot(result.t, result.torque[:, i], lw=0.8, label=label)
-        ax.set_ylabel(f"$u_{{{i + 1}}}$ [N m]")
+        ax.set_ylabel(f"$u_{{{i + 1}}}$ [{_torque_units(results[0])[i]}]")
         ax.grid(True, alpha=0.3)
     axes[1].legend(fontsize="small")
     axes[-1].set_xlabel("time [s]")
@@ -317,17 +328,20 @@ def log_error_limits(norms: Sequence[np.ndarray], epsilon: float) -> tuple[float
 
 def _error_axes(axes: Axes, results: Sequence[Run], labels: Sequence[str]) -> None:
     epsilons = set()
+    unit = position_unit(results[0])
     for result, label in zip(results, labels, strict=True):
         axes.semilogy(result.t, positive_for_log(result.error_norm), lw=0.9, label=label)
         epsilons.add(float(result.epsilon))
     axes.set_ylim(*log_error_limits([r.error_norm for r in results], min(epsilons)))
     for epsilon in sorted(epsilons):
-        axes.axhline(epsilon, color="k", ls="--", lw=1.0, label=f"$\\varepsilon$ = {epsilon:g} rad")
+        axes.axhline(
+            epsilon, color="k", ls="--", lw=1.0, label=f"$\\varepsilon$ = {epsilon:g} {unit}"
+        )
     if len(results) == 1:
         entry = results[0].metrics["entry_time"]
         if entry is not None:
             axes.axvline(entry, color="tab:green", ls=":", lw=1.0, label=f"entry {entry:.3g} s")
-    axes.set(xlabel="time [s]", ylabel="$\\|e\\|$ [rad]")
+    axes.set(xlabel="time [s]", ylabel=f"$\\|e\\|$ [{unit}]")
     axes.grid(True, which="both", alpha=0.3)
     axes.legend(fontsize="small")
 
@@ -376,12 +390,26 @@ def _corner_note(axes: Axes, text: str, **style) -> None:
     )
 
 
+def _joint_kinds(result: Run) -> tuple[str, ...]:
+    """The run's ``info["joint_kinds"]`` when recorded, every joint revolute otherwise."""
+    info = getattr(result, "info", None) or {}
+    return tuple(info.get("joint_kinds") or ("revolute",) * result.dof)
+
+
+def position_unit(result: Run) -> str:
+    """The unit of a run's joint positions and of its ``||e||``: ``rad``, ``m`` when every joint
+    is prismatic, ``rad, m`` for a mix (the norm then adds radians and metres, as ``epsilon``
+    does)."""
+    kinds = set(_joint_kinds(result))
+    if kinds == {"prismatic"}:
+        return "m"
+    return "rad, m" if "prismatic" in kinds else "rad"
+
+
 def _torque_units(result: Run) -> list[str]:
     """Per joint: ``N m`` for a revolute joint, ``N`` for a prismatic one (the run's
     ``info["joint_kinds"]`` when recorded, revolute otherwise)."""
-    info = getattr(result, "info", None) or {}
-    kinds = info.get("joint_kinds") or ("revolute",) * result.dof
-    return ["N" if kind == "prismatic" else "N m" for kind in kinds]
+    return ["N" if kind == "prismatic" else "N m" for kind in _joint_kinds(result)]
 
 
 def _torque_axes(axes: Axes, result: Run, label_prefix: str) -> None:

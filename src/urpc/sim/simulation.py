@@ -264,6 +264,7 @@ def simulate(
         "urdf": str(plant.urdf_path),
         "locked_joints": dict(plant.locked_joints),
     }
+    info["joint_kinds"] = list(plant.joint_kinds)  # units: rad, N m or m, N per joint
     if controller.diagnostic_units:
         info["diagnostic_units"] = dict(controller.diagnostic_units)
     return SimulationResult(

@@ -135,7 +135,6 @@ def simulate_setup(
     info = {
         **result.info,
         "true_parameters": true_parameter_values(setup),
-        "joint_kinds": list(setup.robot.joint_kinds),  # units: rad, N m or m, N per joint
     }
     return dataclasses.replace(result, info=info)
 
