@@ -200,6 +200,27 @@ def test_a_certified_floor_bounds_every_vertex_under_the_worst_disturbance(rr, r
     assert np.all(torque <= np.array(certificate.figures["torque_bound"])), torque
 
 
+def test_a_torque_bound_above_the_effort_names_the_period_that_keeps_it_within(rr, rr_box):
+    """The paper's arm at 1 kHz is certified with joint 1's torque bound above its 1000 N m
+    effort; the certificate names a shorter period at which it is proven within. A certificate
+    computed from scratch at that period (its own cells, widened by its own period) agrees: it
+    is certified with every bound within the efforts. The UR5's payload box at 0.1 ms cannot
+    be helped by a period: the plant's own torque bound exceeds the shoulder's effort."""
+    controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=1e-3, Kr=30.0)
+    certificate = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
+    figures = certificate.figures
+    assert certificate.certified and figures["torques_within_limits"] is False
+    assert max(figures["torque_bound"]) > 1000.0
+    period = figures["torque_period"]
+    assert 1e-4 < period < 1e-3 and f"proven within them at T = {period:.3g} s" in (
+        certificate.summary()
+    )
+    shorter = urpc.synthesize(rr, rr_box, 1e-2, sample_period=period, Kr=30.0)
+    again = certify(shorter, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
+    assert again.certified and again.figures["torques_within_limits"] is True, again.summary()
+    assert max(again.figures["torque_bound"]) <= 1000.0
+
+
 @pytest.mark.parametrize(
     "period, Kr, epsilon, d, home, amplitude, frequency, phase",
     [
@@ -250,6 +271,9 @@ def test_the_floor_bounds_sampled_ur5_plants_under_the_worst_disturbance(ur5):
         final = result.t >= result.t[-1] - 0.5
         bound = np.array(certificate.figures["torque_bound"])
         assert np.all(np.abs(result.torque[final]).max(axis=0) <= bound), k
+    # No period helps: the plant's own torque along the reference exceeds the shoulder's effort.
+    assert certificate.figures["torque_period"] == 0.0
+    assert "no period brings it within" in certificate.summary()
 
 
 def test_the_floor_bounds_panda_plants_where_several_light_modes_decide_the_response(panda):

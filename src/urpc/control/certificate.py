@@ -55,7 +55,8 @@ from .interval import IntervalPassivityController
 #: 4: cells refined where the floor needs them, Taylor Coriolis forms, zonotopes, the motion of
 #: the disturbance's response, the reference within the effort limits.
 #: 5: the disturbance's response also bounded by Cauchy-Schwarz (several light modes).
-CERTIFICATE_VERSION = 5
+#: 6: the period at which the torque bound is within the efforts (torque_period).
+CERTIFICATE_VERSION = 6
 #: The condition a delayed torque fails (the law's delay or the plant's actuation delay).
 DELAY_CONDITION = "actuation delay counted by the argument"
 

@@ -14,18 +14,18 @@ import numpy as np
 from .argument import Condition
 from .cells import CellFloor
 from .interval import IntervalPassivityController
-from .period_bound import PeriodBound
 
 
-def torque_figures(
-    period_bound: PeriodBound, controller, d: float, quantities: dict, parts: dict
-) -> dict:
+def torque_figures(search, controller, d: float, quantities: dict, parts: dict) -> dict:
     """The bound of the commanded torque per joint once in the floor's regime, against the
     URDF's effort limits (a non-positive or infinite limit counts as none). Not a condition of
     ``certified``: a torque the argument cannot keep below the limit is reported, with the
-    joint, in ``torque_note`` and the summary."""
+    joint, in ``torque_note`` and the summary, together with the longest period (below this
+    one) at which the configuration is certified with every joint's bound within its effort
+    (``torque_period`` [s], 0 when none is, :func:`torque_period`). ``search``: the
+    :class:`~urpc.control.sampled_search.SampledSearch` that found the floor."""
     T = controller.sample_period
-    bound = period_bound.torque_bound(T, d, quantities, parts["tube"], parts["r_sup"])
+    bound = search.bound.torque_bound(T, d, quantities, parts["tube"], parts["r_sup"])
     effort, limited = effort_limits(controller.robot)
     out: dict[str, Any] = {"torque_bound": bound.tolist(), "torques_within_limits": True}
     if not np.any(limited):
@@ -35,13 +35,54 @@ def torque_figures(
     worst = int(np.argmax(ratio))
     if ratio[worst] > 1.0:
         joint = controller.robot.joint_names[worst]
+        # The plant's own torque along the reference (over the box and the tube) does not
+        # shrink with the period: when it alone exceeds an effort, no period helps.
+        plant = np.max(quantities["plant_torque"], axis=0)
+        over = limited & (plant > effort)
+        within = 0.0 if over.any() else torque_period(search, quantities, effort, limited)
+        if over.any():
+            j = int(np.argmax(np.where(over, plant / np.where(limited, effort, 1.0), 0.0)))
+            change = (
+                f"no period brings it within: the plant's own torque along the reference, over "
+                f"the box and the tube ||e|| <= {quantities['tube']:g}, is already "
+                f"{plant[j]:.4g} N m on joint '{controller.robot.joint_names[j]}' (effort "
+                f"{effort[j]:.4g} N m; a narrower box, a smaller epsilon or Kr, or a gentler "
+                "reference lowers it)"
+            )
+        elif within > 0:
+            change = f"proven within them at T = {within:.3g} s"
+        else:
+            change = f"not proven within them down to T = {T * TORQUE_PERIODS[-1]:.3g} s"
         out["torques_within_limits"] = False
+        out["torque_period"] = within
         out["torque_note"] = (
             f"torques within the effort limits not proven: joint '{joint}' bound "
             f"{bound[worst]:.4g} N m > effort {effort[worst]:.4g} N m (the argument assumes an "
-            "unclipped torque)"
+            f"unclipped torque); {change}"
         )
     return out
+
+
+#: The periods :func:`torque_period` tries, as fractions of the controller's period.
+TORQUE_PERIODS = tuple(0.9**k for k in range(1, 23))  # down to 0.098 T
+
+
+def torque_period(search, quantities: dict, effort: np.ndarray, limited: np.ndarray) -> float:
+    """The longest period of :data:`TORQUE_PERIODS` (fractions of the controller's, longest
+    first) at which the configuration is certified (floor at most epsilon in a consistent
+    tube) with every limited joint's torque bound within its effort [s]; 0 when none is. Each
+    period is judged on its own with the enclosures of the floor (they hold up to twice the
+    period): sound for the period returned, whether or not the bound falls monotonically."""
+    T, d, epsilon = search.T, search.d, search.epsilon
+    for fraction in TORQUE_PERIODS:
+        period = T * fraction
+        floor, parts, rho = search.least_tube(quantities, period)
+        if not (floor <= epsilon and parts.get("r_sup", math.inf) <= quantities["r_max"]):
+            continue
+        bound = search.bound.torque_bound(period, d, quantities, rho, parts["r_sup"])
+        if np.all(bound[limited] <= effort[limited]):
+            return float(period)
+    return 0.0
 
 
 def effort_limits(robot) -> tuple[np.ndarray, np.ndarray]:

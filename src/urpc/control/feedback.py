@@ -188,7 +188,7 @@ class ImplicitFeedback(FeedbackLaw):
             figures = {**floor_of.figures(quantities), **parts}
         figures.update(search.report(floor, parts, quantities))
         if math.isfinite(floor):
-            figures.update(torque_figures(search.bound, controller, d, quantities, parts))
+            figures.update(torque_figures(search, controller, d, quantities, parts))
         conditions += _sampled_conditions(figures, floor, controller.epsilon, max_period)
         return LawArgument(floor, conditions, figures, max_period)
 
