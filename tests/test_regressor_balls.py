@@ -110,6 +110,58 @@ def test_christoffel_matrices_hold_pinocchio(robot):
                     assert np.all(np.abs(C - each.mid[b, k, p]) <= each.rad[b, k, p] + slack)
 
 
+def test_christoffel_slopes_hold_pinocchio_differences(robot):
+    """``d C(q; e_k) / d q_l`` over boxes holds Pinocchio's central differences of its Coriolis
+    matrix along each coordinate, at points of the box, for two parameter vectors at once."""
+    rng = np.random.default_rng(9)
+    regressor = BallRegressor(robot)
+    pi = parameters_of(robot)
+    scaled = pi * rng.uniform(0.8, 1.2, pi.shape)
+    n, batch, h = robot.dof, 3, 1e-5
+    q = Ball(rng.standard_normal((batch, n)), np.full((batch, n), 0.04))
+    slopes = regressor.christoffel_slopes(q, Ball.point(np.stack([pi, scaled])))
+    assert slopes.mid.shape == (batch, n, n, 2, n, n)
+    model = robot.model.copy()
+    for j in range(n):
+        model.inertias[j + 1] = pin.Inertia.FromDynamicParameters(scaled[10 * j : 10 * j + 10])
+    data = model.createData()
+
+    def coriolis(p: int, qq: np.ndarray, unit: np.ndarray) -> np.ndarray:
+        if p == 0:
+            return robot.C(qq, unit)
+        return pin.computeCoriolisMatrix(model, data, robot.configuration(qq), unit).copy()
+
+    for b in range(batch):
+        for qq in _draws(rng, q.mid[b], q.rad[b] - h, 3):
+            for l, k, p in itertools.product(range(n), range(n), range(2)):
+                step, unit = h * np.eye(n)[l], np.eye(n)[k]
+                difference = (coriolis(p, qq + step, unit) - coriolis(p, qq - step, unit)) / (2 * h)
+                slack = 1e-6 * (1 + np.abs(difference))  # the difference's own error
+                enclosed = slopes[b, l, k, p]
+                assert np.all(np.abs(difference - enclosed.mid) <= enclosed.rad + slack), (l, k, p)
+
+
+def test_coriolis_slopes_hold_pinocchio_differences(robot):
+    """``d C(q, qd) / d q_l`` over boxes of ``q`` at a point velocity holds Pinocchio's central
+    differences of its Coriolis matrix along each coordinate, at points of the box."""
+    rng = np.random.default_rng(11)
+    regressor = BallRegressor(robot)
+    pi = parameters_of(robot)
+    n, batch, h = robot.dof, 3, 1e-5
+    q = Ball(rng.standard_normal((batch, n)), np.full((batch, n), 0.04))
+    qd = rng.standard_normal((batch, n))
+    slopes = regressor.coriolis_slopes(q, qd, pi[None])
+    assert slopes.mid.shape == (batch, n, 1, n, n)
+    for b in range(batch):
+        for qq in _draws(rng, q.mid[b], q.rad[b] - h, 3):
+            for l in range(n):
+                step = h * np.eye(n)[l]
+                difference = (robot.C(qq + step, qd[b]) - robot.C(qq - step, qd[b])) / (2 * h)
+                slack = 1e-6 * (1 + np.abs(difference))  # the difference's own error
+                enclosed = slopes[b, l, 0]
+                assert np.all(np.abs(difference - enclosed.mid) <= enclosed.rad + slack), l
+
+
 def test_mass_matrix_curvatures_hold_second_differences(robot):
     """``d^2 M / dq_k dq_j`` over boxes (jets of jets) holds Pinocchio's central second
     differences at points of the box, corners included, for two parameter vectors at once."""

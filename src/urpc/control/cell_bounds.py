@@ -11,7 +11,7 @@ import dataclasses
 import numpy as np
 
 from ..model.ball_arithmetic import concatenate, stack
-from ..model.regressor_balls import Ball, BallRegressor, Jet
+from ..model.regressor_balls import Ball, BallRegressor
 from ..model.verified_norms import spectral_norm
 from .cell_inertia import LAPACK_MARGIN, InertiaModel, safe_cholesky
 from .parameter_sets import LinkParameters, PlantParameters
@@ -175,25 +175,16 @@ class CenteredCoriolis:
             for _, p in forms
         ]
         centres = stack(rows, 0)
-        cells, n = q.mid.shape
-        # Derivatives along each coordinate l over the box: a jet per direction (the directions
-        # share the value, which the recursion computes once).
-        along = Jet(
-            q.map(lambda x: np.broadcast_to(x[:, None, :], (cells, n, n))),
-            Ball.point(np.broadcast_to(np.eye(n), (cells, n, n))),
-        )
+        # Each of the first three terms by its value at the box's centre and its derivatives
+        # along every coordinate over the box (the regressor's slopes: one pass of jets whose
+        # directions share the value).
         centre = Ball.point(q.mid)
-
-        def over_cell(function, *arguments) -> OverCell:
-            spread = tuple(
-                a.map(lambda x: np.broadcast_to(x[:, None], (cells, n) + x.shape[1:]))
-                for a in arguments
-            )
-            return OverCell(function(centre, *arguments), function(along, *spread).dot)
-
         # C(q; e_k, pi_c) of every centre by its Taylor form; C(q; e_k, d_j), which enters
         # times the velocity's and the parameters' radii both, by a ball of the box.
-        each = over_cell(lambda x: regressor.christoffel_matrices(x, centres))
+        each = OverCell(
+            regressor.christoffel_matrices(centre, centres),
+            regressor.christoffel_slopes(q, centres),
+        )
         per_both = OverCell(regressor.christoffel_matrices(q, directions)) if keys else None
         by_velocity: dict[bytes, tuple[list[int], np.ndarray]] = {}
         for index, (v_center, _) in enumerate(forms):
@@ -203,9 +194,9 @@ class CenteredCoriolis:
         count = len(rows)
         chosen = concatenate([centres, directions], 0)  # every centre's row, then the directions
         for indices, v_center in by_velocity.values():
-            values = over_cell(
-                lambda x, v: regressor.coriolis_matrices(x, v, chosen),
-                Ball.point(v_center),
+            values = OverCell(
+                regressor.coriolis_matrices(centre, Ball.point(v_center), chosen),
+                regressor.coriolis_slopes(q, v_center, chosen),
             )
             along = values.select((slice(count, None),)) if keys else None
             for index in indices:

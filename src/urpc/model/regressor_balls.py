@@ -43,7 +43,7 @@ import pinocchio as pin
 
 from ..errors import UrpcError
 from . import ball_kernels as kernels
-from .ball_arithmetic import Ball, Jet, intersect_symmetric, matvec, transposed
+from .ball_arithmetic import Ball, Jet, concatenate, intersect_symmetric, matvec, transposed
 from .robot import Robot
 
 __all__ = ["Ball", "BallRegressor", "Jet", "matvec", "parameters_of"]
@@ -289,53 +289,97 @@ class BallRegressor:
         values = self._columns(q, columns, parameters, polarize=True)  # (..., j, P, i)
         return values.map(lambda x: np.moveaxis(x, -3, -1))
 
-    def christoffel_matrices(self, q, parameters):
+    def coriolis_slopes(self, q: Ball, qd: np.ndarray, parameters) -> Ball:
+        """The derivatives ``d C(q, qd) / d q_l`` of :meth:`coriolis_matrices` along every
+        coordinate ``l`` over the boxes ``q`` (``batch + (n,)``) at the point velocities ``qd``
+        (one per box): ``batch + (l, P, dof, dof)``, in one pass of first-order jets along the
+        ``dof`` coordinates (the value computed once, shared by the derivatives); the columns
+        ``qd +- e_j`` are formed in ball arithmetic, as :meth:`coriolis_matrices` forms them."""
+        n = self.dof
+        batch = q.shape[:-1]
+        B = int(np.prod(batch, dtype=int))
+        if not isinstance(parameters, Ball):
+            parameters = Ball.point(np.atleast_2d(np.asarray(parameters, dtype=float)))
+        v = Ball.point(np.reshape(np.asarray(qd, dtype=float), (B, 1, n)))
+        unit = Ball.point(np.eye(n)[None])
+        columns = concatenate([v + unit, v - unit], 1)  # (B, 2n, n)
+        vm, vr = (np.zeros((B, 2 * n, n, n + 1)) for _ in range(2))
+        vm[..., 0], vr[..., 0] = columns.mid, columns.rad
+        zeros = np.zeros_like(vm)
+        mid, rad = kernels.recursion(
+            self.chain, kernels.first_order(n), _along_coordinates(q), (vm, vr), (zeros, zeros),
+            np.zeros(2 * n), (parameters.mid, parameters.rad), polarize=True,
+        )  # fmt: skip  # (B, j, P, i, 1 + l)
+        shape = batch + (n, parameters.mid.shape[0], n, n)
+        return Ball(*(np.moveaxis(x[..., 1:], (-1, 1), (1, -1)).reshape(shape) for x in (mid, rad)))
+
+    def christoffel_matrices(self, q: Ball, parameters) -> Ball:
         """``C(q; e_k)`` for every unit velocity ``e_k`` and each model over the boxes of ``q``:
         ``batch + (k, P, dof, dof)``. Column ``i`` of ``C(q; e_k)`` is column ``k`` of
         ``C(q; e_i)`` (the Christoffel symbols are symmetric in their last two indices), so only
         the ``dof (dof + 1) / 2`` pairs ``k <= i`` are evaluated, each by polarization
         ``(c(q, e_k + e_i) - c(q, e_k - e_i)) / 4``, instead of ``dof^2`` (all in one pass, unit
-        parameter rows carried as regressor columns). With a jet ``q`` (values and their
-        derivatives), a jet of such matrices."""
+        parameter rows carried as regressor columns). Their derivatives along ``q``:
+        :meth:`christoffel_slopes`."""
         n = self.dof
         batch = q.shape[:-1]
+        outm, outr, rows, models = self._christoffel_pass(
+            _stacked([q], batch, n), kernels.first_order(0), parameters
+        )
         first, second = np.triu_indices(n)
-        eye = np.eye(n)
-        zero = Ball.point(np.zeros(n))
-        columns = [
-            (Ball.point(eye[k] + eye[i]), zero, 0.0) for k, i in zip(first, second, strict=True)
-        ]
-        columns += [
-            (Ball.point(eye[k] - eye[i]), zero, 0.0) for k, i in zip(first, second, strict=True)
-        ]
-        if isinstance(q, Jet):
-            values = self._columns(q, columns, parameters, polarize=True)  # batch + (pairs, P, i)
-
-            def scatter(part: Ball) -> Ball:
-                shape = batch + (n, part.mid.shape[-2], n, n)
-                mid, rad = np.zeros(shape), np.zeros(shape)
-                for source, out in ((part.mid, mid), (part.rad, rad)):
-                    out[..., first, :, :, second] = np.moveaxis(source, -3, 0)
-                    out[..., second, :, :, first] = np.moveaxis(source, -3, 0)
-                return Ball(mid, rad)
-
-            return Jet(scatter(values.val), scatter(values.dot))
-        if not isinstance(parameters, Ball):
-            parameters = Ball.point(np.atleast_2d(np.asarray(parameters, dtype=float)))
-        B = int(np.prod(batch, dtype=int))
-        velocities = np.stack([column[0].mid for column in columns])  # (C, n), points
-        v = np.broadcast_to(velocities[None, :, :, None], (B, len(columns), n, 1))
-        outm, outr, rows = kernels.recursion(
-            self.chain, kernels.first_order(0), _stacked([q], batch, n), (v, np.zeros_like(v)),
-            (np.zeros_like(v), np.zeros_like(v)), np.zeros(len(columns)),
-            (parameters.mid, parameters.rad), polarize=True, raw=True,
-        )  # fmt: skip
-        models = parameters.mid.shape[0]
         shape = batch + (n, models, n, n)
         return Ball(
             kernels.pair_scatter(outm, first, second, rows, models).reshape(shape),
             kernels.pair_scatter(outr, first, second, rows, models).reshape(shape),
         )
+
+    def christoffel_slopes(self, q: Ball, parameters) -> Ball:
+        """The derivatives ``d C(q; e_k) / d q_l`` of :meth:`christoffel_matrices` along every
+        coordinate ``l`` over the boxes ``q`` (``batch + (n,)``): ``batch + (l, k, P, dof,
+        dof)``, in one pass of first-order jets along the ``dof`` coordinates (the value
+        computed once, shared by the derivatives)."""
+        n = self.dof
+        batch = q.shape[:-1]
+        outm, outr, rows, models = self._christoffel_pass(
+            _along_coordinates(q), kernels.first_order(n), parameters
+        )
+        first, second = np.triu_indices(n)
+        shape = batch + (n, n, models, n, n)
+        slopes = [
+            np.stack(
+                [
+                    kernels.pair_scatter(
+                        np.ascontiguousarray(out[:, :, :, 1 + l : 2 + l]), first, second, rows,
+                        models,
+                    )
+                    for l in range(n)
+                ],
+                1,
+            ).reshape(shape)
+            for out in (outm, outr)
+        ]  # fmt: skip
+        return Ball(*slopes)
+
+    def _christoffel_pass(self, q: tuple[np.ndarray, np.ndarray], algebra, parameters):
+        """The kernel's raw polarized columns ``(c(q, e_k + e_i) - c(q, e_k - e_i)) / 4`` of
+        every pair ``k <= i`` (``q``: (mid, rad) of shape (B, n, K) in ``algebra``): ``(mid,
+        rad, rows, P)``, (B, pairs, n, K, P') each, the rows the kernel holds and the number of
+        models."""
+        n = self.dof
+        if not isinstance(parameters, Ball):
+            parameters = Ball.point(np.atleast_2d(np.asarray(parameters, dtype=float)))
+        first, second = np.triu_indices(n)
+        eye = np.eye(n)
+        velocities = np.concatenate([eye[first] + eye[second], eye[first] - eye[second]])
+        B, C, K = q[0].shape[0], len(velocities), algebra.components
+        vm = np.zeros((B, C, n, K))
+        vm[:, :, :, 0] = velocities
+        zeros = np.zeros_like(vm)
+        outm, outr, rows = kernels.recursion(
+            self.chain, algebra, q, (vm, zeros), (zeros, zeros), np.zeros(C),
+            (parameters.mid, parameters.rad), polarize=True, raw=True,
+        )  # fmt: skip
+        return outm, outr, rows, parameters.mid.shape[0]
 
 
 def parameters_of(robot: Robot) -> np.ndarray:
@@ -347,6 +391,18 @@ def parameters_of(robot: Robot) -> np.ndarray:
 
 
 # ============================================================================ helpers
+def _along_coordinates(q: Ball) -> tuple[np.ndarray, np.ndarray]:
+    """(mid, rad), shape (B, n, 1 + n), of the boxes ``q`` (``batch + (n,)``) as first-order
+    jets along each coordinate (component ``1 + l`` the unit derivative along ``q_l``)."""
+    n = q.mid.shape[-1]
+    B = int(np.prod(q.mid.shape[:-1], dtype=int))
+    qm, qr = np.zeros((B, n, n + 1)), np.zeros((B, n, n + 1))
+    qm[:, :, 0] = np.reshape(q.mid, (B, n))
+    qr[:, :, 0] = np.reshape(q.rad, (B, n))
+    qm[:, np.arange(n), 1 + np.arange(n)] = 1.0
+    return qm, qr
+
+
 def _chain(joints: tuple[_Joint, ...], gravity: np.ndarray) -> kernels.Chain:
     parts = np.zeros((len(joints), 3, 9))
     direction = np.zeros((len(joints), 3))
