@@ -46,11 +46,12 @@ class MismatchNorms:
 
     def link(self, W: Ball, G: Ball | None, link: LinkParameters):
         """The four bounds for one link's ``w = W A delta + G(delta) e`` (pairs, (2, cells))."""
+        mismatch = link_mismatch(W, G, link)
         return self._combine(
-            link_bound(self.inverse, W, G, link),
-            link_bound(self.to_metric, W, G, link),
-            link_bound(self.law.inverse_factor, W, G, link),
-            link_bound(self.identity, W, G, link),
+            link_bound(self.inverse, mismatch),
+            link_bound(self.to_metric, mismatch),
+            link_bound(self.law.inverse_factor, mismatch),
+            link_bound(self.identity, mismatch),
         )
 
     def vector(self, x: np.ndarray):
@@ -365,11 +366,41 @@ def velocity_bound(
 VERTEX_COORDINATES = 5
 
 
-def link_bound(X: np.ndarray, W: Ball, G: Ball | None, link: LinkParameters) -> np.ndarray:
+@dataclasses.dataclass(frozen=True)
+class LinkMismatch:
+    """One link's ``w = W A delta + G(delta) e`` as :func:`link_bound` takes it: the products
+    and radii that do not depend on the matrix ``X`` the norm is taken through, formed once for
+    the four norms of :meth:`MismatchNorms.link` (:func:`link_mismatch`)."""
+
+    link: LinkParameters
+    WA: np.ndarray  # W.mid @ A, (cells, n, 10)
+    radius: np.ndarray  # what the balls' radii add to |W A delta| per row, (cells, n)
+    GA: np.ndarray | None  # G.mid @ A, (cells, k, n, 10)
+    spread: np.ndarray | None  # what the radii add to ||G(delta)|| per row, (cells, n)
+
+
+def link_mismatch(W: Ball, G: Ball | None, link: LinkParameters) -> LinkMismatch:
+    """:class:`LinkMismatch` of ``W``: (cells, n, 10), ``G``: (cells, k, n, 10) (the Jacobian
+    along the tube) or ``None``, and the link's parameter set."""
+    A = link.A
+    magnitude, residual, absolute_A = link.magnitude, link.residual, np.abs(A)
+    radius = (W.rad + 40 * 2.0**-53 * np.abs(W.mid)) @ (absolute_A @ magnitude)  # (cells, n)
+    radius = radius + np.abs(W.mid) @ (absolute_A @ residual)
+    GA = spread = None
+    if G is not None:
+        GA = G.mid @ A
+        spread = (G.rad + 40 * 2.0**-53 * np.abs(G.mid)) @ (absolute_A @ magnitude)
+        spread = spread + np.abs(G.mid) @ (absolute_A @ residual)
+        spread = np.sqrt(np.sum(spread * spread, axis=1))  # (cells, n)
+    return LinkMismatch(link, W.mid @ A, radius, GA, spread)
+
+
+def link_bound(X: np.ndarray, mismatch: LinkMismatch) -> np.ndarray:
     """Per cell, ``(c, g)`` with ``||X w|| <= c + rho g`` over ``w = W A delta + G(delta) e`` for
     every ``delta`` of the link's set, every ``W``, ``G`` in their balls and ``||e|| <= rho``
-    (``X``: (cells, m, n); ``W``: (cells, n, 10); ``G``: (cells, k, n, 10), the Jacobian along the
-    tube, enclosed over a tube at least as wide as ``rho``). Shape (2, cells).
+    (``X``: (cells, m, n); ``mismatch``: :func:`link_mismatch` of ``W``, ``G`` (the Jacobian
+    along the tube, enclosed over a tube at least as wide as ``rho``) and the link). Shape (2,
+    cells).
 
     ``||X W A delta||`` is convex in ``delta``: its maximum over the set (a zonotope,
     :class:`~urpc.control.parameter_sets.LinkParameters`) is at a vertex. The
@@ -377,8 +408,8 @@ def link_bound(X: np.ndarray, W: Ball, G: Ball | None, link: LinkParameters) -> 
     the others enter by the triangle inequality (``||X W A w_i d_i||``); the radii of the balls
     (``W``, ``G``, the set's centre and directions) enter with ``|delta|`` bounded per
     coordinate."""
-    A = link.A
-    XW = X @ (W.mid @ A)  # (cells, m, 10)
+    link = mismatch.link
+    XW = X @ mismatch.WA  # (cells, m, 10)
     generators = link.generators  # (10, p)
     norms = column_norm(XW @ generators)  # (cells, p)
     order = np.argsort(np.max(norms, axis=0) if len(norms) else norms.sum(0))[::-1]
@@ -388,16 +419,13 @@ def link_bound(X: np.ndarray, W: Ball, G: Ball | None, link: LinkParameters) -> 
     )
     vertices = link.centre.mid[:, None] + generators[:, chosen] @ corners  # (10, V)
     bound = column_norm(XW @ vertices).max(-1) + norms[:, rest].sum(-1)
-    magnitude, residual = link.magnitude, link.residual
-    absolute, absolute_A = np.abs(X), np.abs(A)
-    radius = (W.rad + 40 * 2.0**-53 * np.abs(W.mid)) @ (absolute_A @ magnitude)  # (cells, n)
-    radius = radius + np.abs(W.mid) @ (absolute_A @ residual)
-    bound = bound + column_norm(absolute @ radius[..., None])[:, 0]
+    absolute = np.abs(X)
+    bound = bound + column_norm(absolute @ mismatch.radius[..., None])[:, 0]
     per_tube = np.zeros_like(bound)
-    if G is not None:
-        XG = X[:, None] @ (G.mid @ A)  # (cells, k, m, 10)
+    if mismatch.GA is not None:
+        XG = X[:, None] @ mismatch.GA  # (cells, k, m, 10)
         spectral = spectral_norm(np.moveaxis(XG, -1, 1))  # (cells, 10): ||X G_j||_2
-        triangle = spectral @ magnitude
+        triangle = spectral @ link.magnitude
         # Frobenius norm of X G(delta) at the enumerated vertices (a quadratic form in delta),
         # the other generators by the triangle inequality.
         flat = XG.reshape(XG.shape[0], -1, XG.shape[-1])
@@ -407,8 +435,8 @@ def link_bound(X: np.ndarray, W: Ball, G: Ball | None, link: LinkParameters) -> 
         others = generators[:, rest]
         along = np.sqrt(np.maximum(np.sum((H @ others) * others, axis=-2), 0.0))
         frobenius = frobenius + along.sum(-1) * (1 + 1e-10)
-        spread = (G.rad + 40 * 2.0**-53 * np.abs(G.mid)) @ (absolute_A @ magnitude)
-        spread = spread + np.abs(G.mid) @ (absolute_A @ residual)
-        spread = np.sqrt(np.sum(spread * spread, axis=1))  # (cells, n)
-        per_tube = np.minimum(triangle, frobenius) + column_norm(absolute @ spread[..., None])[:, 0]
+        per_tube = (
+            np.minimum(triangle, frobenius)
+            + column_norm(absolute @ mismatch.spread[..., None])[:, 0]
+        )
     return np.stack([bound, per_tube]) * (1 + 1e-10)
