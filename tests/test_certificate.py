@@ -419,6 +419,23 @@ def test_continuous_time_theorem_2_is_certified_for_any_epsilon(rr, rr_box):
     assert {"Theorem 2: kappa_I > 0", "Theorem 2: phi_I > 0"} <= names
 
 
+def test_theorem_1_is_not_certified_against_a_disturbance_larger_than_the_box_states(rr, rr_box):
+    """Theorem 1's robust term covers the disturbance through rho, which includes the box's
+    bound: a certificate asked for a larger ||d|| than the law knows is not certified (an
+    independent continuous-time integration by a helper ended 1.7 to 8 times above the
+    Theorem 1 floor at d = 200 and 1000 N m with the box's d = 1); up to the box's bound it is."""
+    box = dataclasses.replace(rr_box, disturbance_bound=1.0)
+    controller = urpc.synthesize(rr, box, 1e-2, kappa_P=100.0, Kr=30.0)  # continuous, Theorem 1
+    name = "Theorem 1: the disturbance within the bound the law knows"
+    for d, certified in ((None, True), (1.0, True), (0.5, True), (200.0, False)):
+        certificate = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=d)
+        assert certificate.certified is certified, (d, certificate.summary())
+        (condition,) = [c for c in certificate.conditions if c.name == name]
+        assert condition.holds is certified
+        assert math.isfinite(certificate.epsilon_floor) is certified
+    assert "use Theorem 2" in certificate.summary()
+
+
 def test_a_sampled_certificate_needs_the_disturbance_bound(rr, rr_box):
     controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=1e-4)
     certificate = certify(controller, PaperTrajectory(), duration=4.0)

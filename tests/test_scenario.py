@@ -291,8 +291,11 @@ def test_overrides():
     assert info.value.field == "epsilonn"
     with pytest.raises(InputError, match="must be > 0"):
         scenario.with_overrides(duration=-1)
-    with pytest.raises(InputError, match="per control sample"):
+    with pytest.raises(InputError, match="per control sample") as info:
         scenario.with_overrides(sample_period="continuous")  # the disturbance stays 10 N m
+    # The conflicting value is the file's: the error names the file and the override.
+    assert info.value.field == "disturbance" and info.value.source == str(scenario.source)
+    assert "command-line override of sample_period" in str(info.value)
     with pytest.raises(InputError, match="valid: computed-torque, interval, r-alpha"):
         scenario.with_overrides(controller="lqr")
     sampled = scenario.with_overrides(true_parameters="sample", seed=4)

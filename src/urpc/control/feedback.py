@@ -94,6 +94,25 @@ class ContinuousFeedback(FeedbackLaw):
         floor, conditions = controller.gain_law.continuous_time_bound(
             figures["lambda_L"], figures["lambda_U"], controller.Kr, controller.epsilon
         )
+        known = controller.bound.box.disturbance_bound
+        if not controller.gain_law.adaptive:
+            # Theorem 1's robust term dominates the mismatch through rho, which includes the
+            # box's disturbance bound: a larger disturbance than the law knows voids it.
+            within = known is not None and d <= known
+            conditions.append(
+                Condition(
+                    "Theorem 1: the disturbance within the bound the law knows", within, d,
+                    math.nan if known is None else known,
+                    f"||d|| <= {d:g} N m within the box's {known:g} N m, which rho includes"
+                    if within
+                    else f"the plant's ||d|| <= {d:g} N m exceeds the box's disturbance bound "
+                    f"{known if known is None else f'{known:g} N m'} that rho includes: give "
+                    "the box that bound (the law then covers it), or use Theorem 2 "
+                    "(disturbance: unknown), whose gains adapt to any bound",
+                )
+            )  # fmt: skip
+            if not within:  # the floor above assumes the disturbance rho covers
+                floor = math.inf
         return LawArgument(floor, conditions, figures)
 
 

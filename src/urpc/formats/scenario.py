@@ -377,7 +377,16 @@ class Scenario(FileFormat):
         try:
             copy = self.model_copy(update=update)._consistent()
         except FieldError as exc:
-            raise InputError(str(exc), OVERRIDE_SOURCE, exc.path[0]) from None
+            field = exc.path[0]
+            if field in update or self.source is None:
+                raise InputError(str(exc), OVERRIDE_SOURCE, field) from None
+            # The field is the file's: it conflicts with what the command line changed.
+            changed = ", ".join(sorted(update))
+            raise InputError(
+                f"{exc} (the file's value conflicts with the command-line override of {changed})",
+                self.source,
+                field,
+            ) from None
         copy._overridden = self._overridden | frozenset(update)
         return copy
 
