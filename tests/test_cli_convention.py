@@ -340,6 +340,14 @@ def test_prismatic_joints_are_reported_in_m_and_n(capsys, tmp_path):
     assert result.info["joint_kinds"] == ["prismatic", "prismatic"]
     figures = result.plot()
     assert [a.get_ylabel() for a in figures["torque"].axes] == ["$u_{1}$ [N]", "$u_{2}$ [N]"]
+    # The drives of a prismatic joint are in kg, N s/m and N (docs/joint-dynamics.md).
+    box.write_text(box.read_text() + "joints:\n  x: {armature: [0.5, 1.5], damping: [1, 3]}\n")
+    code, out, err = _run(capsys, "check", urdf, "-u", box)
+    assert code == 0, err
+    rows = {
+        line.split()[1]: line.split()[-1] for line in out.splitlines() if line.startswith("  x ")
+    }
+    assert rows == {"armature": "kg", "damping": "s/m"}, out  # "N s/m": its last word
     error_axes = figures["error"].axes[0]
     assert error_axes.get_ylabel() == "$\\|e\\|$ [m]"
     assert "$\\varepsilon$ = 0.01 m" in error_axes.get_legend_handles_labels()[1]

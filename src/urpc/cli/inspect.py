@@ -196,7 +196,7 @@ def box_summary(robot, box) -> dict:
         "payloads": [{"name": p.name, "link": p.link} for p in box.payloads],
         "uncertain_parameters": box.n_uncertain,
         "links": links,
-        "drives": _drives(box),
+        "drives": _drives(box, dict(zip(robot.joint_names, robot.joint_kinds, strict=True))),
         "urdf_dynamics_joints": [
             name
             for name, column in zip(robot.joint_names, robot.urdf_dynamics.T, strict=True)
@@ -205,10 +205,14 @@ def box_summary(robot, box) -> dict:
     }
 
 
-def _drives(box) -> list[dict]:
-    """The joints' drive parameters of a box with a ``joints:`` section (empty: rigid joints)."""
+def _drives(box, kinds: dict[str, str]) -> list[dict]:
+    """The joints' drive parameters of a box with a ``joints:`` section (empty: rigid joints);
+    ``kinds``: each joint's kind, for the units (a prismatic joint's are kg, N s/m, N)."""
     from ..formats.uncertainty import JOINT_FIELDS  # heavy (pydantic, numba): not at parse time
-    from ..model.joint_dynamics import JOINT_UNITS
+    from ..model.joint_dynamics import JOINT_UNITS, PRISMATIC_JOINT_UNITS
+
+    def units(joint: str) -> dict[str, str]:
+        return PRISMATIC_JOINT_UNITS if kinds.get(joint) == "prismatic" else JOINT_UNITS
 
     joints = box.joints
     if joints is None:
@@ -217,7 +221,7 @@ def _drives(box) -> list[dict]:
         {
             "joint": joints.joint_names[column],
             "field": JOINT_FIELDS[row],
-            "unit": JOINT_UNITS[JOINT_FIELDS[row]],
+            "unit": units(joints.joint_names[column])[JOINT_FIELDS[row]],
             "nominal": float(joints.nominal[row, column]),
             "lower": float(joints.lower[row, column]),
             "upper": float(joints.upper[row, column]),

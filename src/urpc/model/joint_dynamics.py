@@ -40,8 +40,10 @@ from ..formats.uncertainty import JOINT_FIELDS, JointEntry
 if TYPE_CHECKING:
     from .robot import Robot
 
-#: Units of the joint parameters (revolute joints; prismatic: kg, N s/m, N).
+#: Units of the joint parameters (revolute joints; prismatic: :data:`PRISMATIC_JOINT_UNITS`).
 JOINT_UNITS = {"armature": "kg m^2", "damping": "N m s/rad", "friction": "N m"}
+#: Units of a prismatic joint's parameters.
+PRISMATIC_JOINT_UNITS = {"armature": "kg", "damping": "N s/m", "friction": "N"}
 #: The stiction band ``v_s`` [rad/s or m/s]: below it a joint may be sticking (module docstring).
 STICTION_VELOCITY = 1e-3
 #: Relative and absolute inflation of :meth:`JointBox.enclose` for the rounding of its few
