@@ -535,6 +535,11 @@ def test_a_reference_that_needs_more_than_the_effort_limits_is_not_certified(rr,
     )
     assert not condition.holds and not certificate.certified
     assert condition.value > 1.0 and "joint" in condition.explanation
+    # No period changes the torque the reference needs: none is reported as certified, and the
+    # advice names the condition instead of a period.
+    assert certificate.max_sample_period == 0.0
+    assert certificate.figures["advice"].startswith("no period or epsilon certifies")
+    assert condition.name in certificate.figures["advice"]
     # Independent check: the largest |tau_i| / effort_i of Pinocchio's RNEA over the vertices.
     effort = rr.model.effortLimit
     worst = 0.0

@@ -217,14 +217,23 @@ def certify(
     # quantities, which fail their conditions; numpy's warnings about them would only be noise.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         argument = law.argument(controller, floor_of, d, progress)
-    conditions += argument.conditions
     reference = reference_torque(controller, trajectory, floor_of.span)
     if reference is not None:
         conditions.append(reference)
+    # The gain conditions and the reference's torque do not depend on the period: when one
+    # fails, no period is certified (a delay keeps the undelayed loop's figures, above).
+    fixed = [c for c in conditions if not c.holds and c.name != DELAY_CONDITION]
+    max_period = 0.0 if fixed else argument.max_sample_period
+    conditions += argument.conditions
     floor, figures = argument.floor, argument.figures
     holds = all(c.holds for c in conditions) and floor <= controller.epsilon
     if not holds:
         note = law.advice(controller, argument)
+        if fixed:  # no period or epsilon helps: say what does
+            note = (
+                f"no period or epsilon certifies this configuration: '{fixed[0].name}' fails "
+                f"whatever the period ({fixed[0].explanation})"
+            )
         if note is not None:
             figures["advice"] = note
         if delay:  # no period or epsilon makes up for a delay the argument does not count
@@ -241,6 +250,6 @@ def certify(
             )  # fmt: skip
     ordered = tuple(sorted(conditions, key=lambda c: c.holds))
     return Certificate(
-        bool(holds), controller.epsilon, float(floor), float(argument.max_sample_period),
+        bool(holds), controller.epsilon, float(floor), float(max_period),
         controller.sample_period, law.name, ordered, figures,
     )  # fmt: skip
