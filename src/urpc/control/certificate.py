@@ -56,7 +56,9 @@ from .interval import IntervalPassivityController
 #: the disturbance's response, the reference within the effort limits.
 #: 5: the disturbance's response also bounded by Cauchy-Schwarz (several light modes).
 #: 6: the period at which the torque bound is within the efforts (torque_period).
-CERTIFICATE_VERSION = 6
+#: 7: Theorem 1 against a disturbance beyond the box's; no largest period when a condition no
+#: period changes fails; cells split without a floor while the floor at rho = 0 falls.
+CERTIFICATE_VERSION = 7
 #: The condition a delayed torque fails (the law's delay or the plant's actuation delay).
 DELAY_CONDITION = "actuation delay counted by the argument"
 
