@@ -305,3 +305,21 @@ def test_scenario_file_field(tmp_path):
     with pytest.raises(InputError, match="needs samples") as info:
         load_scenario(path)
     assert info.value.field == "actuation_delay"
+
+
+def test_a_run_that_clips_below_the_torque_bound_is_not_covered(capsys):
+    """The argument assumes an unclipped torque: a run whose torque limit lies below the
+    certificate's bound of the commanded torque (``torque_bound``) is reported as not covered,
+    naming the joint; a limit above the bound on every joint keeps the guarantee."""
+    run = ("simulate", "rr_planar/s3_ic1", "--sampled-law", "implicit", "--duration", "0.3")
+    code, out, _ = _cli(capsys, *run, "--json")
+    plain = json.loads(out)
+    bound = plain["certificate"]["figures"]["torque_bound"]
+    assert code == 0 and plain["certified"] is True and bound[0] > 900.0
+    code, out, err = _cli(capsys, *run, "--json", "--torque-limit", "900,900")
+    clipped = json.loads(out)
+    assert code == 0 and clipped["certified"] is False
+    assert "clips the torque at 900 N m on joint 'joint1'" in clipped["not_certified"]
+    above = ",".join(f"{1.01 * b:.6g}" for b in bound)
+    code, out, _ = _cli(capsys, *run, "--json", "--torque-limit", above)
+    assert code == 0 and json.loads(out)["certified"] is True

@@ -14,6 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from ..control.base import Controller
 from ..control.certificate import Certificate
 from ..control.certificate_cache import CachedCertificate, CertificateCache, cached_certify
@@ -129,12 +131,39 @@ def guarantee_of(
         why = f"not certified: {exc}"
         return Guarantee({"certified": False, "certificate": None, "not_certified": why})
     certificate = outcome.certificate
+    clipped = clipped_beyond_the_bound(setup, certificate)
     fields = {
-        "certified": certificate.certified,
+        "certified": certificate.certified and clipped is None,
         "certificate": certificate.to_dict(),
-        "not_certified": None if certificate.certified else certificate.summary(),
-    }
+        "not_certified": (
+            None if certificate.certified and clipped is None
+            else clipped if certificate.certified
+            else certificate.summary()
+        ),
+    }  # fmt: skip
     return Guarantee(fields, outcome)
+
+
+def clipped_beyond_the_bound(setup, certificate: Certificate) -> str | None:
+    """Why a run that clips its torque (the scenario's ``torque_limit``) is not covered by a
+    certified configuration's guarantee, or ``None``: the argument assumes an unclipped torque,
+    and a joint's limit lies below the certificate's bound of the torque the law commands in
+    the floor's regime (``torque_bound``)."""
+    limit = getattr(setup, "torque_limit", None)
+    bound = certificate.figures.get("torque_bound")
+    if limit is None or bound is None:
+        return None
+    limit = np.broadcast_to(np.asarray(limit, dtype=float), np.shape(bound))
+    below = np.flatnonzero(limit < np.asarray(bound, dtype=float))
+    if not len(below):
+        return None
+    j = int(below[np.argmax(np.asarray(bound)[below] / limit[below])])
+    joint = setup.robot.joint_names[j]
+    return (
+        f"not covered: this run clips the torque at {limit[j]:.4g} N m on joint '{joint}', "
+        f"below the certificate's bound {bound[j]:.4g} N m of the torque the law commands "
+        "(the argument assumes an unclipped torque; the configuration itself is certified)"
+    )
 
 
 def certificate_fields(setup, controller: Controller, **options: Any) -> dict[str, Any]:
