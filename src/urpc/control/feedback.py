@@ -105,10 +105,11 @@ class ContinuousFeedback(FeedbackLaw):
                     math.nan if known is None else known,
                     f"||d|| <= {d:g} N m within the box's {known:g} N m, which rho includes"
                     if within
-                    else f"the plant's ||d|| <= {d:g} N m exceeds the box's disturbance bound "
-                    f"{known if known is None else f'{known:g} N m'} that rho includes: give "
-                    "the box that bound (the law then covers it), or use Theorem 2 "
-                    "(disturbance: unknown), whose gains adapt to any bound",
+                    else f"the plant's ||d|| <= {d:g} N m exceeds "
+                    + ("the box's disturbance bound, none" if known is None
+                       else f"the box's disturbance bound {known:g} N m")
+                    + ", which rho includes: give the box that bound (the law then covers it), "
+                    "or use Theorem 2 (disturbance: unknown), whose gains adapt to any bound",
                 )
             )  # fmt: skip
             if not within:  # the floor above assumes the disturbance rho covers

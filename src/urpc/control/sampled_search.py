@@ -21,11 +21,12 @@ from .period_bound import PeriodBound
 REFINE_ROUNDS = 6
 #: ... while each lowers it by at least this fraction ...
 REFINE_GAIN = 0.02
-#: ... and the cells stay at most this many. Without a floor in the tube, the cells are split
-#: again after the first round only while the floor at ``rho = 0`` is within this factor of the
-#: tube (below it a fixed point may appear; the UR5 at 1 kHz is at 2.9 times its tube after one
-#: round, and four more brought it to 2.6 times for twice the certificate's cost).
+#: ... and the cells stay at most this many.
 MAX_REFINED_CELLS = 4000
+#: Without a floor in the tube, the cells are split again after the first round only while the
+#: floor at ``rho = 0`` is within this factor of the tube (below it a fixed point may appear;
+#: the UR5 at 1 kHz is at 2.9 times its tube after one round, and four more brought it to 2.6
+#: times for twice the certificate's cost).
 REACHABLE = 1.5
 #: At most this many rounds for the largest period (when it is at least a tenth of the period),
 #: while each lengthens it by at least PERIOD_GAIN.
@@ -35,8 +36,9 @@ PERIOD_ROUNDS, PERIOD_GAIN = 3, 0.05
 def _improves(score: tuple[int, float], best: tuple[int, float]) -> bool:
     """Whether a round of splitting paid: a lower tier of :meth:`SampledSearch._score`, or the
     same tier's value lower by at least :data:`REFINE_GAIN`. (Comparing ``1e6 + floor at rho =
-    0`` relatively, as before, saw no gain where that floor fell by a third: a reference at
-    1.41 ms stopped at 191 cells, floor 8.9e-3 over the wide tube, where 300 cells certify it.)"""
+    0`` relatively, as before, saw no gain where that floor fell by 5 % a round: a reference at
+    1.41 ms stopped at 191 cells, floor 8.85e-3 over the wide tube, where 528 cells certify
+    it.)"""
     return score[0] < best[0] or (score[0] == best[0] and score[1] < best[1] * (1 - REFINE_GAIN))
 
 
