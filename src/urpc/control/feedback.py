@@ -99,15 +99,21 @@ class ContinuousFeedback(FeedbackLaw):
             # Theorem 1's robust term dominates the mismatch through rho, which includes the
             # box's disturbance bound: a larger disturbance than the law knows voids it.
             within = known is not None and d <= known
+            # As many digits as tell the two apart (10.000001 against 10, not "10 > 10").
+            digits = next(
+                (k for k in (3, 6, 9, 12, 17) if known is None or f"{d:.{k}g}" != f"{known:.{k}g}"),
+                17,
+            )
             conditions.append(
                 Condition(
                     "Theorem 1: the disturbance within the bound the law knows", within, d,
                     math.nan if known is None else known,
-                    f"||d|| <= {d:g} N m within the box's {known:g} N m, which rho includes"
+                    f"||d|| <= {d:.{digits}g} N m within the box's {known:.{digits}g} N m, which "
+                    "rho includes"
                     if within
-                    else f"the plant's ||d|| <= {d:g} N m exceeds "
+                    else f"the plant's ||d|| <= {d:.{digits}g} N m exceeds "
                     + ("the box's disturbance bound, none" if known is None
-                       else f"the box's disturbance bound {known:g} N m")
+                       else f"the box's disturbance bound {known:.{digits}g} N m")
                     + ", which rho includes: give the box that bound (the law then covers it), "
                     "or use Theorem 2 (disturbance: unknown), whose gains adapt to any bound",
                 )

@@ -133,6 +133,11 @@ class SampledSearch:
         cells = self.bound.critical_cells(
             T, self.d, quantities, rho if math.isfinite(floor) else 0.0
         )
+        if not len(cells) and not math.isfinite(floor):
+            # Nothing decides the floor at rho = 0 (its terms are flat over the cells): what
+            # keeps the fixed point away is the terms' growth over the tube; split the cells
+            # that decide the floor there.
+            cells = self.bound.critical_cells(T, self.d, quantities, quantities["tube"])
         if self.floor_of.cells + len(cells) > MAX_REFINED_CELLS:
             return False
         return bool(self.floor_of.refine(cells))
