@@ -92,10 +92,7 @@ def test_christoffel_matrices_hold_pinocchio(robot):
     q = Ball(rng.standard_normal((batch, n)), np.full((batch, n), 0.05))
     each = regressor.christoffel_matrices(q, Ball.point(np.stack([pi, scaled])))
     assert each.mid.shape == (batch, n, 2, n, n)
-    model = robot.model.copy()
-    for j in range(n):
-        model.inertias[j + 1] = pin.Inertia.FromDynamicParameters(scaled[10 * j : 10 * j + 10])
-    data = model.createData()
+    model, data = _model_with(robot, scaled)
     for b in range(batch):
         for qq in _draws(rng, q.mid[b], q.rad[b], 6):
             for k in range(n):
@@ -121,10 +118,7 @@ def test_christoffel_slopes_hold_pinocchio_differences(robot):
     q = Ball(rng.standard_normal((batch, n)), np.full((batch, n), 0.04))
     slopes = regressor.christoffel_slopes(q, Ball.point(np.stack([pi, scaled])))
     assert slopes.mid.shape == (batch, n, n, 2, n, n)
-    model = robot.model.copy()
-    for j in range(n):
-        model.inertias[j + 1] = pin.Inertia.FromDynamicParameters(scaled[10 * j : 10 * j + 10])
-    data = model.createData()
+    model, data = _model_with(robot, scaled)
 
     def coriolis(p: int, qq: np.ndarray, unit: np.ndarray) -> np.ndarray:
         if p == 0:
@@ -134,11 +128,15 @@ def test_christoffel_slopes_hold_pinocchio_differences(robot):
     for b in range(batch):
         for qq in _draws(rng, q.mid[b], q.rad[b] - h, 3):
             for l, k, p in itertools.product(range(n), range(n), range(2)):
-                step, unit = h * np.eye(n)[l], np.eye(n)[k]
-                difference = (coriolis(p, qq + step, unit) - coriolis(p, qq - step, unit)) / (2 * h)
-                slack = 1e-6 * (1 + np.abs(difference))  # the difference's own error
-                enclosed = slopes[b, l, k, p]
-                assert np.all(np.abs(difference - enclosed.mid) <= enclosed.rad + slack), (l, k, p)
+                unit = np.eye(n)[k]
+                _assert_holds_difference(
+                    slopes[b, l, k, p],
+                    lambda x, p=p, unit=unit: coriolis(p, x, unit),
+                    qq,
+                    l,
+                    h,
+                    (l, k, p),
+                )
 
 
 def test_coriolis_slopes_hold_pinocchio_differences(robot):
@@ -155,11 +153,26 @@ def test_coriolis_slopes_hold_pinocchio_differences(robot):
     for b in range(batch):
         for qq in _draws(rng, q.mid[b], q.rad[b] - h, 3):
             for l in range(n):
-                step = h * np.eye(n)[l]
-                difference = (robot.C(qq + step, qd[b]) - robot.C(qq - step, qd[b])) / (2 * h)
-                slack = 1e-6 * (1 + np.abs(difference))  # the difference's own error
-                enclosed = slopes[b, l, 0]
-                assert np.all(np.abs(difference - enclosed.mid) <= enclosed.rad + slack), l
+                _assert_holds_difference(
+                    slopes[b, l, 0], lambda x, v=qd[b]: robot.C(x, v), qq, l, h, l
+                )
+
+
+def _model_with(robot, parameters: np.ndarray):
+    """A copy of the robot's Pinocchio model with the bodies' standard ``parameters`` (10 per
+    joint body), and its data."""
+    model = robot.model.copy()
+    for j in range(robot.dof):
+        model.inertias[j + 1] = pin.Inertia.FromDynamicParameters(parameters[10 * j : 10 * j + 10])
+    return model, model.createData()
+
+
+def _assert_holds_difference(enclosed: Ball, f, q: np.ndarray, l: int, h: float, where):
+    """``enclosed`` holds the central difference of ``f`` along coordinate ``l`` at ``q``."""
+    step = h * np.eye(len(q))[l]
+    difference = (f(q + step) - f(q - step)) / (2 * h)
+    slack = 1e-6 * (1 + np.abs(difference))  # the difference's own error
+    assert np.all(np.abs(difference - enclosed.mid) <= enclosed.rad + slack), where
 
 
 def test_mass_matrix_curvatures_hold_second_differences(robot):
@@ -173,10 +186,7 @@ def test_mass_matrix_curvatures_hold_second_differences(robot):
     q = Ball(rng.standard_normal((batch, n)), np.full((batch, n), 0.03))
     H = regressor.mass_matrix_curvatures(q, np.stack([pi, scaled]))
     assert H.mid.shape == (batch, n, n, 2, n, n)
-    model = robot.model.copy()
-    for j in range(n):
-        model.inertias[j + 1] = pin.Inertia.FromDynamicParameters(scaled[10 * j : 10 * j + 10])
-    data = model.createData()
+    model, data = _model_with(robot, scaled)
 
     def mass(which, x):
         if which == 0:

@@ -31,17 +31,15 @@ def torque_figures(search, controller, d: float, quantities: dict, parts: dict) 
     if not np.any(limited):
         out["torques_within_limits"] = None
         return out
-    ratio = np.where(limited, bound / np.where(limited, effort, 1.0), 0.0)
-    worst = int(np.argmax(ratio))
-    if ratio[worst] > 1.0:
+    worst = most_exceeded(bound, effort, limited)
+    if worst is not None:
         joint = controller.robot.joint_names[worst]
         # The plant's own torque along the reference (over the box and the tube) does not
         # shrink with the period: when it alone exceeds an effort, no period helps.
         plant = np.max(quantities["plant_torque"], axis=0)
-        over = limited & (plant > effort)
-        within = 0.0 if over.any() else torque_period(search, quantities, effort, limited)
-        if over.any():
-            j = int(np.argmax(np.where(over, plant / np.where(limited, effort, 1.0), 0.0)))
+        j = most_exceeded(plant, effort, limited)
+        within = 0.0 if j is not None else torque_period(search, quantities, effort, limited)
+        if j is not None:
             change = (
                 f"no period brings it within: the plant's own torque along the reference, over "
                 f"the box and the tube ||e|| <= {quantities['tube']:g}, is already "
@@ -83,6 +81,14 @@ def torque_period(search, quantities: dict, effort: np.ndarray, limited: np.ndar
         if np.all(bound[limited] <= effort[limited]):
             return float(period)
     return 0.0
+
+
+def most_exceeded(value: np.ndarray, limit: np.ndarray, limited: np.ndarray) -> int | None:
+    """The joint whose ``value`` exceeds its ``limit`` by the largest ratio, among the
+    ``limited`` ones, or ``None`` when none exceeds its limit."""
+    ratio = np.where(limited, value / np.where(limited, limit, 1.0), 0.0)
+    worst = int(np.argmax(ratio))
+    return worst if ratio[worst] > 1.0 else None
 
 
 def effort_limits(robot) -> tuple[np.ndarray, np.ndarray]:

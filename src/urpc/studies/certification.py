@@ -19,6 +19,7 @@ import numpy as np
 from ..control.base import Controller
 from ..control.certificate import Certificate
 from ..control.certificate_cache import CachedCertificate, CertificateCache, cached_certify
+from ..control.certificate_report import most_exceeded
 from ..control.interval import IntervalPassivityController
 from ..errors import InputError
 from .certification_progress import CertificateProgress
@@ -153,11 +154,11 @@ def clipped_beyond_the_bound(setup, certificate: Certificate) -> str | None:
     bound = certificate.figures.get("torque_bound")
     if limit is None or bound is None:
         return None
-    limit = np.broadcast_to(np.asarray(limit, dtype=float), np.shape(bound))
-    below = np.flatnonzero(limit < np.asarray(bound, dtype=float))
-    if not len(below):
+    bound = np.asarray(bound, dtype=float)
+    limit = np.broadcast_to(np.asarray(limit, dtype=float), bound.shape)
+    j = most_exceeded(bound, limit, np.isfinite(limit) & (limit > 0))
+    if j is None:
         return None
-    j = int(below[np.argmax(np.asarray(bound)[below] / limit[below])])
     joint = setup.robot.joint_names[j]
     return (
         f"not covered: this run clips the torque at {limit[j]:.4g} N m on joint '{joint}', "
