@@ -114,7 +114,8 @@ def plot_trajectory(result: Run, *, actual: bool = True) -> Figure:
                 result.t, result.q[:, i], ls="--", color=line.get_color(), label=f"$q_{{{i + 1}}}$"
             )
     axes.set(xlabel="time [s]", ylabel=f"joint position [{position_unit(result)}]")
-    axes.set_title(f"Trajectory - {describe(result)}")
+    # Two lines, as the other figures' titles: a long description is not cut at the frame.
+    figure.suptitle(f"Trajectory\n{describe(result)}", fontsize=_TITLE_SIZE)
     axes.grid(True, alpha=0.3)
     _joint_legend(axes, ncol=2)
     return figure
@@ -261,7 +262,7 @@ def plot_errors(
     figure = Figure(figsize=(7.0, 3.6), layout="constrained")
     axes = figure.add_subplot()
     _error_axes(axes, results, labels=list(labels))
-    axes.set_title(title or f"Tracking error - {describe(results[0])}")
+    figure.suptitle(title or f"Tracking error\n{describe(results[0])}", fontsize=_TITLE_SIZE)
     return figure
 
 
