@@ -69,3 +69,22 @@ def test_cli_refuses_the_search_for_the_paper_law(capsys):
     err = capsys.readouterr().err
     assert code == 2 and err.startswith("error: ") and "--sampled-law implicit" in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_a_uniform_gain_certifies_no_worse_than_per_joint_gains_of_the_same_minimum(rr, rr_box):
+    """Why the search is over uniform gains: the floor divides the bound of ||r|| by min Kr,
+    and every enclosure grows with each joint's gain (the state boxes, K_r = max Kr, and its
+    factor sqrt(lambda_U / lambda_L) when Kr is not uniform), so raising a joint's gain above
+    the minimum can only raise the floor and shorten the largest period."""
+    options = dict(duration=4.0, disturbance_bound=10.0)
+    uniform = urpc.certify(
+        urpc.synthesize(rr, rr_box, 1e-2, sample_period=1e-3, Kr=30.0), PaperTrajectory(), **options
+    )
+    assert uniform.certified
+    for Kr in ((30.0, 45.0), (45.0, 30.0)):
+        mixed = urpc.certify(
+            urpc.synthesize(rr, rr_box, 1e-2, sample_period=1e-3, Kr=Kr), PaperTrajectory(),
+            **options,
+        )  # fmt: skip
+        assert mixed.epsilon_floor >= uniform.epsilon_floor, Kr
+        assert mixed.max_sample_period <= uniform.max_sample_period, Kr

@@ -7,6 +7,12 @@ mismatch with ``Kr`` (``qd_a = qd_d + Kr e``, ``qdd_a`` holds ``Kr ed``). The be
 the arm, the box, the reference and the period, so it is searched, not tuned by hand: each
 candidate is synthesized and certified, and the best certificate wins (certified with the lowest
 floor; if none is certified, the largest certified period, then the lowest floor).
+
+The candidates are uniform gains. Per-joint gains cannot do better under this argument: the
+floor divides by ``min Kr`` and every other term grows with each joint's gain (``K_r = max Kr``,
+times ``sqrt(lambda_U / lambda_L)`` when ``Kr`` is not uniform), so the uniform gain at the
+minimum certifies no higher floor and no shorter period (docs/sampled-data.md §3, "Choosing
+``Kr`` and the gain ceiling").
 """
 
 from __future__ import annotations
