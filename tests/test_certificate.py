@@ -701,3 +701,28 @@ def test_a_shorter_run_of_the_same_reference_gets_no_much_looser_floor():
         for duration in (0.5, 1.0)
     ]
     assert floors[0] <= 1.1 * floors[1], floors
+
+
+def test_theorem_1_under_a_hold_is_told_to_raise_its_constant_gain(rr, rr_box):
+    """With constant gains the contraction a of a period grows with T phi_P as its perturbation b
+    grows with T, so no period certifies a small phi_P (a helper's report read "shorten the
+    sample period"): the report names phi_P, and phi_P at the adaptive gains' ceiling certifies
+    what Theorem 2 certifies there."""
+    box = dataclasses.replace(rr_box, disturbance_bound=10.0)
+    options = dict(duration=4.0, disturbance_bound=10.0)
+    small = urpc.synthesize(rr, box, 1e-2, sample_period=1e-3, Kr=30.0, phi_P=1.0)
+    certificate = certify(small, PaperTrajectory(), **options)
+    assert not certificate.certified and certificate.max_sample_period == 0.0
+    margin = next(c for c in certificate.conditions if c.name.startswith("contraction a"))
+    assert not margin.holds and "raise phi_P" in margin.explanation
+    assert "shorten" not in margin.explanation
+    advice = certificate.figures["advice"]
+    assert "no period helps" in advice and "Raise phi_P" in advice
+    assert "shorter period or a lower Kr helps" not in advice
+    raised = urpc.synthesize(rr, box, 1e-2, sample_period=1e-3, Kr=30.0, phi_P=small.phi_max)
+    adaptive = urpc.synthesize(rr, rr_box, 1e-2, sample_period=1e-3, Kr=30.0)
+    assert raised.phi_P == adaptive.phi_max
+    theorem_1 = certify(raised, PaperTrajectory(), **options)
+    theorem_2 = certify(adaptive, PaperTrajectory(), **options)
+    assert theorem_1.certified and theorem_2.certified
+    assert theorem_1.epsilon_floor == pytest.approx(theorem_2.epsilon_floor, rel=1e-9)

@@ -58,7 +58,8 @@ from .interval import IntervalPassivityController
 #: 6: the period at which the torque bound is within the efforts (torque_period).
 #: 7: Theorem 1 against a disturbance beyond the box's; no largest period when a condition no
 #: period changes fails; cells split without a floor while the floor at rho = 0 falls.
-CERTIFICATE_VERSION = 7
+#: 8: Theorem 1 under a hold is told to raise phi_P, not to shorten the period.
+CERTIFICATE_VERSION = 8
 #: The condition a delayed torque fails (the law's delay or the plant's actuation delay).
 DELAY_CONDITION = "actuation delay counted by the argument"
 

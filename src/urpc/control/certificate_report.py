@@ -208,6 +208,17 @@ def advice(
             "(M_L not positive definite or beta <= 0 over that cell's box of q and the "
             "parameters): narrow the box's mass and inertia intervals, or use more cells"
         )
+    if term is None and not controller.adaptive:
+        return text + (
+            f"; the gains are constant (Theorem 1: the box states its disturbance bound), so "
+            f"the contraction a = {figures.get('contraction', math.nan):.3g} grows with T "
+            f"phi_P as the perturbation b grows with T (a - b = "
+            f"{figures.get('margin', math.nan):.3g}): no period helps. Raise phi_P "
+            f"(now {controller.phi_P:.3g} N m s/rad; a approaches beta = "
+            f"{figures.get('beta', math.nan):.3g} once T phi_P passes the inertia, and "
+            f"Theorem 2's adaptive gains stop at phi_max = {controller.phi_max:.3g} N m s/rad "
+            "at this period), or state `disturbance: unknown` for Theorem 2's adaptive gains"
+        )
     if term is None:
         margin = figures.get("margin", math.nan)
         text += (
@@ -240,6 +251,12 @@ def advice(
         )
     if term == "disturbance":
         text += "; a smaller disturbance bound or a larger Kr lowers it in proportion"
+    if not controller.adaptive and max_period <= 0:
+        text += (
+            f"; the gains are constant (Theorem 1), so a shorter period shrinks the contraction "
+            f"too: raise phi_P (now {controller.phi_P:.3g} N m s/rad; Theorem 2's adaptive "
+            f"gains stop at phi_max = {controller.phi_max:.3g} N m s/rad at this period)"
+        )
     return text
 
 

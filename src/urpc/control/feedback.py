@@ -215,7 +215,9 @@ class ImplicitFeedback(FeedbackLaw):
         figures.update(search.report(floor, parts, quantities))
         if math.isfinite(floor):
             figures.update(torque_figures(search, controller, d, quantities, parts))
-        conditions += _sampled_conditions(figures, floor, controller.epsilon, max_period)
+        conditions += _sampled_conditions(
+            figures, floor, controller.epsilon, max_period, controller.adaptive
+        )
         return LawArgument(floor, conditions, figures, max_period)
 
     def advice(self, controller, argument):
@@ -245,10 +247,11 @@ def feedback_law(
 
 
 def _sampled_conditions(
-    figures: dict[str, float], floor: float, epsilon: float, max_period: float
+    figures: dict[str, float], floor: float, epsilon: float, max_period: float, adaptive: bool
 ) -> list[Condition]:
     """The sampled law's conditions; each explanation says what to change when the condition
-    fails, and what holds when it holds."""
+    fails, and what holds when it holds. With constant gains (Theorem 1, not ``adaptive``) the
+    contraction ``a`` grows with ``T phi_P`` as ``b`` grows with ``T``: the fix is the gain."""
     margin = figures["margin"]
     fix_floor = (
         (f"raise epsilon to {floor:.3g} rad or shorten" if math.isfinite(floor)
@@ -256,6 +259,12 @@ def _sampled_conditions(
         + (f" the period to {max_period:.3g} s" if max_period > 0
            else " the period: none up to twice this one is certified")
     )  # fmt: skip
+    if max_period <= 0 and not adaptive:
+        fix_floor = (
+            (f"raise epsilon to {floor:.3g} rad or phi_P" if math.isfinite(floor)
+             else "no epsilon is guaranteed at this period: raise phi_P")
+            + " (the gains are constant: no period up to twice this one is certified)"
+        )  # fmt: skip
     # Bounds that fail for the tube's sake (the inertia moves more over ||e|| <= epsilon than
     # they allow) are not the box's fault alone: say so.
     tube = (
@@ -273,7 +282,8 @@ def _sampled_conditions(
          tube or "the box's inertia bounds are vacuous: narrow the mass/inertia intervals",
          "the law's inertia model is at least beta times every plant's"),
         ("contraction a exceeds the perturbation b (at r = 0)", margin > 0, margin, 0.0,
-         "shorten the sample period or lower Kr (b grows with T Kr and T |qd|)",
+         "shorten the sample period or lower Kr (b grows with T Kr and T |qd|)" if adaptive
+         else CONSTANT_GAIN_FIX,
          f"a period contracts the error by a - b = {margin:.3g} at least, in the plant's metric"),
         ("ultimate bound below epsilon", floor <= epsilon, floor, epsilon, fix_floor,
          f"the error ends below the floor {floor:.3g} rad <= epsilon"),
@@ -282,6 +292,13 @@ def _sampled_conditions(
         Condition(name, holds, value, limit, held if holds else fix)
         for name, holds, value, limit, fix, held in specs
     ]
+
+
+#: What to change when a period does not contract under Theorem 1's constant gains.
+CONSTANT_GAIN_FIX = (
+    "raise phi_P, or state `disturbance: unknown` for Theorem 2's adaptive gains (the gains "
+    "are constant: the contraction a grows with T phi_P as b grows with T, so no period helps)"
+)
 
 
 #: Floor of the eigenvalues of :func:`positive_part`, relative to the largest one.
