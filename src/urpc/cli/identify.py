@@ -17,6 +17,7 @@ from .common import (
     add_robot_positional,
     non_negative_float,
     non_negative_int,
+    path,
     positive_float,
     positive_int,
     print_json,
@@ -42,7 +43,7 @@ def register(commands) -> None:
     )
     add_robot_positional(p)
     p.add_argument("--excite", action="store_true", help="write an exciting trajectory to --out")
-    p.add_argument("--data", nargs="+", type=Path, metavar="FILE", help="data files (CSV or NPZ)")
+    p.add_argument("--data", nargs="+", type=path, metavar="FILE", help="data files (CSV or NPZ)")
     p.add_argument(
         "--prior",
         metavar="BOX",
@@ -209,6 +210,8 @@ def run_identify(args) -> int:
 #: An exciting trajectory is written with at least this many samples per period of its highest
 #: harmonic (a trajectory file is read back as a spline through them).
 EXCITE_SAMPLES_PER_PERIOD = 10
+#: At most this many samples are written (about 0.4 GB of CSV for a 7-dof arm).
+EXCITE_MAX_SAMPLES = 1_000_000
 
 
 def _excite(args, robot, out: Path, write_new_file) -> int:
@@ -230,6 +233,14 @@ def _excite(args, robot, out: Path, write_new_file) -> int:
             f"{args.rate:g} Hz gives fewer than {EXCITE_SAMPLES_PER_PERIOD} samples per period of "
             f"the highest harmonic ({args.harmonics} x {args.frequency:g} Hz = {highest:g} Hz): "
             f"give --rate {EXCITE_SAMPLES_PER_PERIOD * highest:g} or more, or a lower --frequency",
+            field="--rate",
+        )
+    samples = round(args.rate / args.frequency)  # one period
+    if samples > EXCITE_MAX_SAMPLES:
+        raise InputError(
+            f"{args.rate:g} Hz over a period of {1 / args.frequency:g} s is {samples:.3g} samples; "
+            f"at most {EXCITE_MAX_SAMPLES:.0e} are written: give a lower --rate or a higher "
+            "--frequency",
             field="--rate",
         )
 

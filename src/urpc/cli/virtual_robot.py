@@ -201,7 +201,10 @@ def run_virtual_robot(args) -> int:
             f"parameters drawn from the box (seed {args.seed})",
         )
     else:
-        point, what = load_parameter_point(true, robot, box), f"parameters from {true}"
+        try:
+            point, what = load_parameter_point(true, robot, box), f"parameters from {true}"
+        except InputError as exc:
+            raise InputError(f"{exc}; or 'sample' or 'nominal'", field="true-params") from None
     plant = box.plant(robot, point)
     if args.q0 is not None and len(args.q0) != robot.dof:
         raise InputError(f"{len(args.q0)} values; the robot has {robot.dof} joints", field="q0")

@@ -22,6 +22,11 @@ from . import SAMPLED_LAWS
 from .base import sample_period_of
 from .interval import IntervalPassivityController
 
+#: The smallest epsilon [rad or m] a controller is synthesized for: an error below it is lost in
+#: the rounding of joint positions of order 1 (2.2e-16 relative), and ``Kr = 3 / sqrt(epsilon)``
+#: then overflows the dynamics' enclosures.
+MIN_EPSILON = 1e-12
+
 
 def synthesize(
     robot: Robot,
@@ -72,7 +77,12 @@ def synthesize(
             range), an unknown bound method.
     """
     check_type("robot", robot, Robot, "a Robot (urpc.load_robot(...))")
-    epsilon = number_in("epsilon", epsilon, "a finite number > 0 [rad]", lambda x: x > 0)
+    epsilon = number_in(
+        "epsilon", epsilon,
+        f"a finite number >= {MIN_EPSILON:g} [rad] (a smaller error is lost in the rounding of "
+        "q, and the default Kr = 3 / sqrt(epsilon) overflows the dynamics)",
+        lambda x: x >= MIN_EPSILON,
+    )  # fmt: skip
     kappa_P = number_in("kappa_P", kappa_P, "a finite number >= 1 (Theorem 1)", lambda x: x >= 1)
     phi_P = number_in("phi_P", phi_P, "a finite number >= 1 (Theorem 1)", lambda x: x >= 1)
     kappa_I = number_in("kappa_I", kappa_I, "a finite number > 0 (Theorem 2)", lambda x: x > 0)

@@ -143,6 +143,12 @@ def _unknowns(robot: Robot, prior: ParameterBox, payload: str | None):
     if payload is None:
         return None, [], True
     links = [p for p in prior.payloads if p.link == payload]
+    if not links and payload not in robot.link_names:
+        raise InputError(
+            f"'{payload}' is not a link of {robot.name}; "
+            + did_you_mean(payload, robot.moving_link_names),
+            field="payload",
+        )
     if not links:
         if not prior.payloads:
             raise InputError(

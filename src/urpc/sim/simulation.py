@@ -153,6 +153,13 @@ def simulate(
     qd0 = finite_vector("qd0", reference0.qd if qd0 is None else qd0, n)
     duration = positive_number("duration", duration, "a finite number > 0 [s]")
     sample_period = controller.sample_period
+    if delay and delay * sample_period > duration:
+        samples = math.floor(duration / sample_period)
+        raise InputError(
+            f"a delay of {delay} samples ({delay * sample_period:.3g} s) is longer than the run "
+            f"({duration:g} s, {samples} samples): no torque would act; give at most {samples}",
+            field="actuation_delay",
+        )
     if epsilon is None:
         epsilon = controller.epsilon
         if epsilon is None:

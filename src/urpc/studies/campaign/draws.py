@@ -24,6 +24,9 @@ from ...validation import checked_count
 from ...wording import count
 from ..scenario import ScenarioSetup
 
+#: The largest initial offset a campaign draws per joint [rad or m]: ``ic_spread * epsilon``.
+MAX_OFFSET = 1.0
+
 
 class VertexRunsWarning(UserWarning):
     """More vertex runs were asked for than the campaign has runs, or the box vertices."""
@@ -94,6 +97,14 @@ def draw_runs(
     seed = checked_count("seed", seed, 0)
     if not (math.isfinite(ic_spread) and ic_spread >= 0):
         raise InputError(f"{ic_spread!r} must be a finite number >= 0 [epsilon]", field="ic_spread")
+    epsilon = setup.scenario.epsilon
+    if ic_spread * epsilon > MAX_OFFSET:
+        raise InputError(
+            f"{ic_spread:g} epsilon = {ic_spread * epsilon:.3g} per joint: the initial "
+            f"offsets are a perturbation of the reference's start, at most {MAX_OFFSET:g} rad "
+            f"(or m); give at most {MAX_OFFSET / epsilon:.3g}",
+            field="ic_spread",
+        )
     total = 2**box.n_uncertain
     run_sequence, selection_sequence = np.random.SeedSequence(seed).spawn(2)
     if vertex_runs is None:
@@ -112,7 +123,6 @@ def draw_runs(
         candidates = iter(range(total))
     else:
         candidates = box.random_vertices(np.random.default_rng(selection_sequence))
-    epsilon = setup.scenario.epsilon
     specs: list[RunSpec] = []
     rejected_vertices = 0
     for index, run_seed in enumerate(run_sequence.spawn(runs)):

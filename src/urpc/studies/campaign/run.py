@@ -26,6 +26,9 @@ from .result import CampaignResult
 from .store import LOCK_NAME, STORE_NAME, CampaignStore
 from .worker import RunOutcome, RunTask, run_one
 
+#: The most runs of one campaign: their draws are made, and held, before the first run starts.
+MAX_RUNS = 100_000
+
 
 class CampaignInterrupted(KeyboardInterrupt):
     """A campaign stopped by Ctrl-C (SIGINT): the workers are stopped, the finished runs are kept
@@ -97,6 +100,12 @@ def run_campaign(
         scenario = load_scenario(scenario)
     workers = checked_count("workers", workers, 1)
     runs = checked_count("runs", runs, 1)
+    if runs > MAX_RUNS:
+        raise InputError(
+            f"{runs} runs: at most {MAX_RUNS} in one campaign (every run is drawn before the "
+            "first starts); split it into campaigns of other seeds",
+            field="runs",
+        )
     seed = checked_count("seed", seed, 0)
     if isinstance(ic_spread, bool) or not isinstance(ic_spread, int | float | np.floating):
         raise InputError(f"{ic_spread!r} must be a finite number >= 0 [epsilon]", field="ic_spread")
@@ -259,8 +268,9 @@ def _run_dask(
     hint = "start one with 'dask scheduler' and 'dask worker ADDRESS', or drop --scheduler"
     try:
         protocol, location = parse_address(address)
-        if protocol in ("tcp", "tls"):
-            parse_host_port(location)
+        if protocol not in ("tcp", "tls"):  # Dask's other comms are in-process or need extras
+            raise ValueError(f"the protocol '{protocol}' is not tcp:// or tls://")
+        parse_host_port(location)
     except ValueError as exc:
         raise InputError(
             f"'{address}' is not a scheduler address like tcp://127.0.0.1:8786 ({exc}); {hint}",
