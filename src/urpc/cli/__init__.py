@@ -10,6 +10,7 @@ commands, each with :func:`~urpc.cli.common.add_command` (its name, ``handler`` 
 from __future__ import annotations
 
 import argparse
+import errno
 import sys
 import warnings
 from collections.abc import Sequence
@@ -70,9 +71,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # e.g. `urpc robots | head`
         sys.stderr.close()
         return EXIT_OK
+    except OSError as exc:  # the file system refused a path no command checks (a name too long)
+        print(f"error: {os_error_line(exc)}", file=sys.stderr)
+        return EXIT_INPUT
     except KeyboardInterrupt:
         print("error: interrupted", file=sys.stderr)
         return 130
+
+
+def os_error_line(exc: OSError) -> str:
+    """One line for a file system's refusal: the path (its ends, when long), the reason and,
+    for a name too long, the limits."""
+    name = "" if exc.filename is None else str(exc.filename)
+    if len(name) > 120:
+        name = f"{name[:60]}...{name[-40:]} ({len(name)} characters)"
+    reason = exc.strerror or str(exc)
+    if exc.errno == errno.ENAMETOOLONG:
+        reason += ": give a shorter path (a name of at most 255 bytes, a path of at most 4096)"
+    return one_line(f"{name}: {reason}" if name else reason)
 
 
 def _print_warning(message, category, filename, lineno, file=None, line=None) -> None:

@@ -45,6 +45,16 @@ RESULTS_ROOT = Path("urpc-results")
 NEGATIVE_VALUE = re.compile(r"^-\.?\d[\d.eE+\-,% ]*$")
 
 
+def path(text: str) -> Path:
+    """A path option's value: an empty one (an unset shell variable, ``--out "$DIR"``) is refused
+    instead of meaning the current folder."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(
+            "an empty path (an unset shell variable?): give a file or folder name"
+        )
+    return Path(text)
+
+
 class Parser(argparse.ArgumentParser):
     """argparse with the package's error contract: one ``error:`` line, exit code 2; negative
     numbers are values (:data:`NEGATIVE_VALUE`), answered by the option's own check."""
@@ -168,7 +178,7 @@ def add_robot_arguments(parser: argparse.ArgumentParser, uncertainty_required: b
     parser.add_argument(
         "--uncertainty",
         "-u",
-        type=Path,
+        type=path,
         metavar="FILE",
         required=uncertainty_required,
         help=UNCERTAINTY_HELP,
@@ -211,7 +221,7 @@ def add_new_file_arguments(parser) -> None:
     """``--out/-o FILE`` (required) and ``--force``: the file a command writes, never
     overwritten without ``--force``."""
     parser.add_argument(
-        "--out", "-o", type=Path, required=True, metavar="FILE", help="file to write"
+        "--out", "-o", type=path, required=True, metavar="FILE", help="file to write"
     )
     parser.add_argument("--force", action="store_true", help="overwrite FILE if it exists")
 
@@ -312,7 +322,7 @@ def add_output_arguments(
     written without ``--out``), ``--json`` and ``--no-progress``."""
     where = "nothing is written" if default is None else default
     parser.add_argument(
-        "--out", type=Path, metavar="DIR", help=f"output folder for the {what} (default: {where})"
+        "--out", type=path, metavar="DIR", help=f"output folder for the {what} (default: {where})"
     )
     add_json_argument(parser, on_stdout=True)
     if progress:

@@ -4,7 +4,6 @@ speaking the packet format of docs/robot.md), behind the safety layer and the wa
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 from ..names import SAFE_MODES, SAMPLED_LAWS
 from .common import (
@@ -13,6 +12,7 @@ from .common import (
     add_json_argument,
     json_text,
     non_negative_int,
+    path,
     positive_float,
 )
 
@@ -55,13 +55,13 @@ def register(commands) -> None:
     p.add_argument(
         "--controller",
         metavar="FILE",
-        type=Path,
+        type=path,
         help="a controller saved with controller.save() (default: synthesize)",
     )
     p.add_argument(
         "--save-controller",
         metavar="FILE",
-        type=Path,
+        type=path,
         help="also save the controller to FILE, once the robot answers (not overwritten "
         "without --force)",
     )
@@ -113,7 +113,7 @@ def register(commands) -> None:
     )
     p.add_argument(
         "--out",
-        type=Path,
+        type=path,
         metavar="DIR",
         help="save result.npz, result.csv, summary.json, run.json",
     )

@@ -15,6 +15,7 @@ import numpy as np
 import pinocchio as pin
 
 from .modules import Module
+from .urdf import yourdfpy_module
 
 #: Name of the massless link at the output frame of the last module (payloads are fixed to it).
 TCP_LINK = "tcp"
@@ -49,7 +50,7 @@ def compose_urdf(chain: Sequence[Module], name: str) -> tuple[Any, tuple[Part, .
     joints are ``joint1 .. jointN`` (with ``<dynamics>`` from an actuator's drive), a massless :data:`TCP_LINK` marks the output frame of the last
     body, and a payload module is left out of the URDF (:data:`PAYLOAD_NAME` in the box).
     """
-    import yourdfpy
+    yourdfpy = yourdfpy_module()
 
     links, joints, parts = [], [], []
     parent: Module | None = None
@@ -115,14 +116,14 @@ def _dynamics(module: Module) -> Any:
     """``<dynamics damping friction>`` of an actuator's joint: its drive's nominal viscous
     damping [N m s/rad] and Coulomb friction [N m] (none without a drive); ``Robot.urdf_dynamics``
     of the loaded assembly, the box's ``joints:`` entry being what enters the dynamics."""
-    import yourdfpy
+    yourdfpy = yourdfpy_module()
 
     drive = module.drive
     return None if drive is None else yourdfpy.Dynamics(drive.damping, drive.friction)
 
 
 def _inertial(module: Module) -> Any:
-    import yourdfpy
+    yourdfpy = yourdfpy_module()
 
     inertia = module.inertia
     origin = np.eye(4)
@@ -133,7 +134,7 @@ def _inertial(module: Module) -> Any:
 
 
 def _visuals(module: Module, link: str) -> list[Any]:
-    import yourdfpy
+    yourdfpy = yourdfpy_module()
 
     shape = module.shape
     if shape is None:

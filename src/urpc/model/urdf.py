@@ -3,6 +3,7 @@ Pinocchio merges links joined by fixed joints), joint-type checks, and locking j
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -239,11 +240,30 @@ def robot_display_name(robot: str) -> str:
 MAX_URDF_BYTES = 8 << 20
 
 
+def yourdfpy_module():
+    """``yourdfpy``, imported with Ctrl-C held back: its import pulls in trimesh, whose optional
+    imports catch every exception, a ``KeyboardInterrupt`` too, and go on; a Ctrl-C pressed
+    meanwhile is delivered once the import is done (by the default handler, at once)."""
+    import signal
+    import threading
+
+    if "yourdfpy" in sys.modules or threading.current_thread() is not threading.main_thread():
+        import yourdfpy
+
+        return yourdfpy
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        import yourdfpy
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+    return yourdfpy
+
+
 def read_urdf_inertials(path: Path) -> dict[str, pin.Inertia]:
     """Per-link inertias from the URDF (yourdfpy), in link frames, with joint-type checks."""
     import xml.etree.ElementTree as ElementTree
 
-    import yourdfpy
+    yourdfpy = yourdfpy_module()
 
     # A hostile size first (a URDF is text of a few hundred kB at most), then well-formedness:
     # the C++ URDF parser prints its own lines on stderr otherwise.
