@@ -58,7 +58,13 @@ def register(commands) -> None:
         help=ROBOT_HELP + "; as in simulate, replaces or stands in for SCENARIO",
     )
     add_uncertainty_option(p)
-    p.add_argument("--runs", type=positive_int, required=True, metavar="N", help="number of runs")
+    p.add_argument(
+        "--runs",
+        type=positive_int,
+        required=True,
+        metavar="N",
+        help="number of runs (at most 100000)",
+    )
     where = p.add_mutually_exclusive_group()
     where.add_argument(
         "--workers", type=positive_int, metavar="N", help="local worker processes (default: 2)"
