@@ -299,3 +299,73 @@ def test_short_file_segment_cannot_hide_its_speed(tmp_path):
     assert np.abs(trajectory.evaluate(coarse)[1][:, 0]).max() < 20
     with pytest.raises(urpc.InputError, match=r"the velocity of joint joint1 is 1\d\d\d"):
         check_limits(trajectory, urpc.load_robot("rr_planar"), source=path)
+
+
+# ---------------------------------------------------------------- 9. time spans and steps
+def test_a_huge_time_span_is_checked_piece_by_piece(tmp_path):
+    # a 1 ms grid over 1e9 s would be 1e12 points (7 TiB); the pieces are a handful
+    write_csv(tmp_path / "slow.csv", "t,q1,q2", [0.0, 1e9], [[0.0, 0.0], [0.1, 0.0]])
+    assert build(load_scenario(scenario(tmp_path, {"kind": "file", "path": "slow.csv"})))
+    waypoints = {"kind": "waypoints", "points": [[0, 0], [0.1, 0]], "times": [0, 1e9]}
+    assert build(load_scenario(scenario(tmp_path, waypoints)))
+
+
+def test_a_quick_step_late_in_a_long_span_is_still_found(tmp_path):
+    t = np.array([0.0, 1e6, 1e6 + 0.02, 2e6])
+    q = np.array([[0.0, 0.0], [0.0, 0.0], [0.5, 0.0], [0.5, 0.0]])
+    np.savez(tmp_path / "late.npz", t=t, q=q, qd=np.zeros_like(q))
+    message = refused(tmp_path, {"kind": "file", "path": "late.npz"})
+    assert "late.npz: field 'trajectory': the velocity of joint joint1 is 46.875" in message
+
+
+def test_a_span_that_overflows_the_spline_is_refused(tmp_path):
+    write_csv(tmp_path / "max.csv", "t,q1,q2", [0.0, 1e308], [[0.0, 0.0], [0.1, 0.0]])
+    message = refused(tmp_path, {"kind": "file", "path": "max.csv"})
+    assert "max.csv: field 't': the position of the spline through the samples is not finite" in (
+        message
+    )
+    assert "span t = 0 to 1e+308 s" in message and "give times in seconds" in message
+
+
+def test_time_steps_too_small_to_differentiate_are_refused(tmp_path):
+    write_csv(tmp_path / "tiny.csv", "t,q1,q2", [0.0, 1e-300], [[0.0, 0.0], [0.1, 0.0]])
+    message = refused(tmp_path, {"kind": "file", "path": "tiny.csv"})
+    assert "tiny.csv: field 't': sample 1, line 3 (t = 1e-300 s) comes 1e-300 s after" in message
+    assert "the smallest step accepted is 1e-09 s" in message
+    message = refused(
+        tmp_path, {"kind": "waypoints", "points": [[0, 0], [0.1, 0]], "times": [0, 1e-320]}
+    )
+    assert "field 'trajectory.times': point 1" in message
+    assert "the smallest step accepted is 1e-09 s" in message
+    # relative to the largest time: 1e9 s and 1e9 s + 0.5 s are one step of 0.5 s < 1 s
+    with pytest.raises(urpc.InputError, match=r"smallest step accepted is 1 s \(1e-09 times"):
+        urpc.from_samples([0.0, 1e9, 1e9 + 0.5], [[0.0], [0.0], [0.0]])
+
+
+@pytest.mark.parametrize(
+    ("t", "q", "field", "expected"),
+    [
+        ([0, 1e-300], [[0, 0], [1, 1]], "t", "comes 1e-300 s after the one before"),
+        ([0, 1e308], [[0, 0], [1, 1]], "t", "spline through the samples is not finite"),
+        (np.linspace(0, 1e308, 6), np.zeros((6, 2)), "t", "no spline fits the samples"),
+        (np.linspace(0, 1, 11), np.full((11, 2), 1e308), "q", "positions |q| up to 1e+308 rad"),
+    ],
+)
+def test_samples_whose_spline_is_not_finite_are_refused(t, q, field, expected):
+    with pytest.raises(urpc.InputError) as info:
+        urpc.from_samples(t, q).reference(0.5)
+    assert info.value.field == field and expected in str(info.value)
+
+
+def test_waypoints_whose_segment_overflows_are_refused():
+    with pytest.raises(urpc.InputError, match="segment from point 0 to 1 .* overflows double"):
+        urpc.WaypointTrajectory([[-1e308, 0], [1e308, 1]], [0, 1])
+    with pytest.raises(urpc.InputError, match="the acceleration of the segment from point 0"):
+        urpc.WaypointTrajectory([[0, 0], [1e300, 1]], [0, 1e-5])
+
+
+def test_the_limits_grid_of_an_unknown_kind_is_bounded():
+    with pytest.raises(urpc.InputError) as info:
+        check_limits(urpc.PaperTrajectory(), urpc.load_robot("rr_planar"), times=[0, 1e9])
+    message = str(info.value)
+    assert "field 't'" in message and "the longest span accepted is 1000 s" in message

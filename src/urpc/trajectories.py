@@ -126,6 +126,45 @@ class Trajectory(ABC):
         return q, radius_q, qd, radius_qd, qdd, radius_qdd, J
 
 
+#: Smallest step between two sample or waypoint times, relative to the largest time (and at least
+#: this many seconds): a reference evaluates the fraction ``(t - t_k) / h`` of a step ``h``, whose
+#: rounding error is ``|t| 2.2e-16 / h``, and scales velocity and acceleration by ``1 / h`` and
+#: ``1 / h^2``; steps of at least ``1e-9 max(1 s, |t|)`` keep that error below ``2.2e-7`` and
+#: those scales finite. Closer samples are rounding noise, not a motion (a controller's sample
+#: period is microseconds at the least).
+MIN_TIME_STEP = 1e-9
+
+
+def check_time_steps(times: np.ndarray, describe, source=None, field: str = "t") -> None:
+    """Refuse ``times`` that do not increase strictly, or whose steps are below
+    :data:`MIN_TIME_STEP` (of the largest time, at least 1 s): too close to tell apart, or to
+    differentiate, in double precision. ``describe(row)`` names a sample in the message.
+
+    Raises:
+        InputError: naming the first bad sample, the step and the smallest step accepted.
+    """
+    steps = np.diff(times)
+    if np.any(steps <= 0):
+        row = int(np.flatnonzero(steps <= 0)[0]) + 1
+        raise InputError(
+            f"times must increase strictly: {describe(row)} does not come after "
+            f"t = {times[row - 1]:.6g} s",
+            source,
+            field,
+        )
+    smallest = MIN_TIME_STEP * max(1.0, float(np.max(np.abs(times))))
+    if np.any(steps < smallest):
+        row = int(np.flatnonzero(steps < smallest)[0]) + 1
+        raise InputError(
+            f"{describe(row)} comes {steps[row - 1]:.3g} s after the one before; the smallest "
+            f"step accepted is {smallest:.3g} s ({MIN_TIME_STEP:g} times max(1 s, largest |t|)): "
+            "closer times cannot be told apart or differentiated in double precision; merge or "
+            "drop the close ones",
+            source,
+            field,
+        )
+
+
 def _joints(value: Sequence[float] | np.ndarray, name: str) -> np.ndarray:
     """``value`` as one finite number per joint (at least one joint): what sets a reference's
     joint count."""
@@ -321,9 +360,32 @@ class QuinticTrajectory(Trajectory):
             )
         if not (np.all(np.isfinite(self.points)) and np.all(np.isfinite(self.times))):
             raise InputError("points and times must be finite", field="points")
-        if np.any(np.diff(self.times) <= 0):
-            raise InputError(f"times must increase strictly, got {self.times}", field="times")
+        check_time_steps(
+            self.times, lambda row: f"point {row} (t = {self.times[row]:.6g} s)", field="times"
+        )
         self.dof = self.points.shape[1]
+        # position, velocity, acceleration and jerk of each segment: |delta| times the blend's
+        # peaks over L^0..L^3 (a finite point may be 2e308 from the next, a short segment's
+        # acceleration overflow)
+        lengths = np.diff(self.times)[:, None]
+        with np.errstate(over="ignore", invalid="ignore"):
+            delta = np.abs(np.diff(self.points, axis=0))
+            peaks = {
+                "position step": delta,
+                "velocity": QUINTIC_PEAK_VELOCITY * delta / lengths,
+                "acceleration": QUINTIC_PEAK_ACCELERATION * delta / lengths**2,
+                "jerk": 60.0 * delta / lengths**3,
+            }
+        for what, values in peaks.items():
+            if not np.all(np.isfinite(values)):
+                segment = int(np.flatnonzero(~np.all(np.isfinite(values), axis=1))[0])
+                raise InputError(
+                    f"the {what} of the segment from point {segment} to {segment + 1} "
+                    f"(t = {self.times[segment]:.6g} to {self.times[segment + 1]:.6g} s) "
+                    "overflows double precision: give points closer together or the segment "
+                    "more time",
+                    field="points",
+                )
 
     def evaluate(self, t):
         t = np.asarray(t, dtype=float)

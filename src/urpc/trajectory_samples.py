@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
-from .trajectories import Reference, Trajectory
+from .trajectories import Reference, Trajectory, check_time_steps
 
 
 class FileTrajectory(Trajectory):
@@ -32,8 +32,6 @@ class FileTrajectory(Trajectory):
     kind = "file"
 
     def __init__(self, t, q, qd=None, qdd=None, *, source=None, header_lines: int = 0):
-        from scipy.interpolate import make_interp_spline
-
         self.source = None if source is None else str(source)
         self.header_lines = header_lines
         self.t = self._array("t", t).reshape(-1)
@@ -72,16 +70,65 @@ class FileTrajectory(Trajectory):
                     )[0]
                 )
                 raise InputError(f"{self.describe(row)} is not finite", self.source, name)
-        steps = np.diff(self.t)
-        if np.any(steps <= 0):
-            row = int(np.flatnonzero(steps <= 0)[0]) + 1
-            raise InputError(
-                f"times must increase strictly: {self.describe(row)} does not come after "
-                f"t = {self.t[row - 1]:.6g} s",
-                self.source,
-                "t",
-            )
+        check_time_steps(self.t, self.describe, self.source, "t")
         self.dof = self.q.shape[1]
+        with np.errstate(all="ignore"):  # an overflow is refused by _check_finite, by name
+            try:
+                spline = self._fit(qd, qdd)
+            except InputError:
+                raise
+            except (np.linalg.LinAlgError, ValueError) as exc:
+                raise InputError(
+                    f"no spline fits the samples ({exc}): {self._scale()}",
+                    self.source,
+                    self._scale_field(),
+                ) from None
+            self._spline = spline
+            self._velocity = spline.derivative(1)
+            self._acceleration = spline.derivative(2)
+            self._check_finite()
+
+    def _scale(self) -> str:
+        """What double precision cannot hold, and what to change: for messages about a spline
+        that overflows (its coefficients scale positions by powers of the steps)."""
+        if self._scale_field() == "q":
+            return (
+                f"positions |q| up to {np.abs(self.q).max():.3g} rad are beyond what double "
+                "precision holds through the spline: give positions in rad (or m)"
+            )
+        return (
+            f"the samples span t = {self.t[0]:.6g} to {self.t[-1]:.6g} s, beyond what double "
+            "precision holds through the spline: give times in seconds, of a physical span"
+        )
+
+    def _scale_field(self) -> str:
+        """The field to blame for a spline double precision cannot hold: ``q`` when a position's
+        square overflows, else the times ``t``."""
+        return "q" if np.abs(self.q).max() > 1e150 else "t"
+
+    def _check_finite(self) -> None:
+        """Refuse a spline whose position, velocity, acceleration or jerk is not finite: finite
+        samples can still overflow (a span of 1e308 s squared, positions near 1e308), and the
+        reference would be NaN everywhere. The coefficients bound the values (the convex hull
+        property of the B-spline and Bernstein forms), so finite coefficients suffice."""
+        pieces = (
+            ("position", self._spline),
+            ("velocity", self._velocity),
+            ("acceleration", self._acceleration),
+            ("jerk", self._spline.derivative(3)),
+        )
+        for what, piece in pieces:
+            if not np.all(np.isfinite(piece.c)):
+                raise InputError(
+                    f"the {what} of the spline through the samples is not finite: {self._scale()}",
+                    self.source,
+                    self._scale_field(),
+                )
+
+    def _fit(self, qd, qdd):
+        """The interpolating spline of the module docstring (``qd``, ``qdd`` checked)."""
+        from scipy.interpolate import make_interp_spline
+
         if qd is None:
             self._warn_if_not_at_rest()
             k = 5 if len(self.t) >= 6 else (3 if len(self.t) >= 4 else 1)
@@ -103,9 +150,7 @@ class FileTrajectory(Trajectory):
                 else np.asarray(qdd, dtype=float).reshape(self.q.shape)
             )
             spline = _quintic_bpoly(self.t, self.q, qd, qdd)
-        self._spline = spline
-        self._velocity = spline.derivative(1)
-        self._acceleration = spline.derivative(2)
+        return spline
 
     def _array(self, name: str, values, shape: tuple | None = None) -> np.ndarray:
         """``values`` as a float array (of ``shape``, when given: a single joint's column may

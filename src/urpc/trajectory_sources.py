@@ -18,6 +18,7 @@ from .trajectories import Trajectory
 from .trajectory_files import load_samples
 from .trajectory_moves import Approach, WaypointTrajectory
 from .trajectory_samples import from_samples
+from .validation import positive_number
 
 __all__ = [
     "WAYPOINT_ACCELERATION",
@@ -26,6 +27,11 @@ __all__ = [
     "from_samples",
     "planned_trajectory",
 ]
+
+
+#: Most points of the grid :func:`check_limits` lays over a trajectory whose pieces it does not
+#: know (10^6: 1000 s at the default 1 ms; some 150 MB for a 6-joint arm's three arrays).
+MAX_GRID_POINTS = 10**6
 
 
 def check_limits(
@@ -39,21 +45,52 @@ def check_limits(
     step: float = 1e-3,
 ) -> None:
     """Refuse a trajectory that leaves the robot's position or velocity limits, or
-    ``acceleration_limit`` [rad/s^2] (scalar or per joint; ``None``: none), on a grid of ``step``
-    [s] over its samples (``times``, default: its own ``t`` or ``times``), at every sample, and at
-    every interior extremum of each polynomial piece's position, velocity and acceleration (so a
-    segment shorter than ``step`` cannot hide a peak); the error names the joint and the sample
-    nearest to its worst violation."""
+    ``acceleration_limit`` [rad/s^2] (scalar or per joint; ``None``: none), over its samples
+    (``times``, default: its own ``t`` or ``times``); the error names the joint and the sample
+    nearest to its worst violation.
+
+    A spline (:class:`~urpc.trajectory_samples.FileTrajectory`) or quintic segments
+    (:class:`~urpc.trajectories.QuinticTrajectory`) are checked exactly, piece by piece: at every
+    sample and break between pieces and at every interior extremum of each piece's position,
+    velocity and acceleration (where a polynomial's maximum lies), so no peak hides between
+    checked times and the work grows with the pieces, not with the time span (a span of 1e9 s
+    costs what 1 s does). Another trajectory is checked on a grid of ``step`` [s] and 64 points
+    between samples, of at most :data:`MAX_GRID_POINTS` points.
+
+    Raises:
+        InputError: a limit left (``field``), or a grid of too many points (naming the longest
+            span the step allows).
+    """
+    step = positive_number("step", step, "a finite time step > 0 [s]")
     samples = np.asarray(
         times
         if times is not None
         else getattr(trajectory, "t", getattr(trajectory, "times", [0.0])),
         dtype=float,
-    )
-    grid = np.union1d(
-        np.union1d(samples, np.arange(samples[0], samples[-1] + step, step)),
-        _critical_times(trajectory, samples),
-    )
+    ).reshape(-1)
+    if samples.size == 0 or not np.all(np.isfinite(samples)):
+        raise InputError(
+            f"the times to check are {samples.tolist()!r:.80}; give finite times [s]",
+            source,
+            "times",
+        )
+    critical, exact = _critical_times(trajectory, samples)
+    if exact:
+        grid = np.union1d(samples, critical)
+    else:
+        span = float(samples[-1] - samples[0])
+        if not span / step < MAX_GRID_POINTS:
+            raise InputError(
+                f"checking the limits on a grid of {step:g} s over t = {samples[0]:.6g} to "
+                f"{samples[-1]:.6g} s needs {span / step:.3g} points, more than "
+                f"{MAX_GRID_POINTS:.0e}: the longest span accepted is {MAX_GRID_POINTS * step:g} "
+                "s (give shorter times, or a larger step)",
+                source,
+                "t",
+            )
+        grid = np.union1d(
+            np.union1d(samples, np.arange(samples[0], samples[-1] + step, step)), critical
+        )
     q, qd, qdd = trajectory.evaluate(grid)
     lower, upper = robot.position_limits
     velocity = np.where(
@@ -120,14 +157,21 @@ def per_joint(value, dof: int, source, field: str) -> np.ndarray:
     return values
 
 
-def _critical_times(trajectory: Trajectory, samples: np.ndarray) -> np.ndarray:
-    """Times inside ``trajectory``'s polynomial pieces where a joint's position, velocity or
-    acceleration can peak between samples: the roots of the velocity, acceleration and jerk of a
-    spline (:class:`~urpc.trajectory_samples.FileTrajectory`), and for rest-to-rest quintic
-    segments (:class:`~urpc.trajectories.QuinticTrajectory`) the peak velocity at half
-    the segment and the peak accelerations at ``(3 -+ sqrt 3) / 6`` of it. Unknown kinds: a grid
-    of 64 points per interval between samples."""
+def _critical_times(trajectory: Trajectory, samples: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Times inside ``[samples[0], samples[-1]]`` where a joint's position, velocity or
+    acceleration can peak, and whether they are all of them (with the samples).
+
+    Exact (``True``) for a spline (:class:`~urpc.trajectory_samples.FileTrajectory`): its breaks
+    and the roots of its velocity, acceleration and jerk; and for rest-to-rest quintic segments
+    (:class:`~urpc.trajectories.QuinticTrajectory`): the segment ends, the peak velocity at half a
+    segment and the peak accelerations at ``(3 -+ sqrt 3) / 6`` of it (the position is monotone
+    between ends). Unknown kinds (``False``): 64 points per interval between samples."""
     from scipy.interpolate import BPoly, BSpline, PPoly
+
+    from .trajectories import QuinticTrajectory
+
+    def inside(times: np.ndarray) -> np.ndarray:
+        return times[(times >= samples[0]) & (times <= samples[-1])]
 
     spline = getattr(trajectory, "_spline", None)
     if isinstance(spline, (BSpline, BPoly)):
@@ -138,20 +182,22 @@ def _critical_times(trajectory: Trajectory, samples: np.ndarray) -> np.ndarray:
                 piece = PPoly.from_spline(BSpline(spline.t, spline.c[:, j], spline.k))
             else:
                 piece = PPoly.from_bernstein_basis(BPoly(coefficients[:, :, j], spline.x))
+            found.append(piece.x)
             for order in (1, 2, 3):
                 if piece.c.shape[0] > order:
                     roots = piece.derivative(order).roots(extrapolate=False)
                     found.append(roots[np.isfinite(roots)])
-        times = np.concatenate(found) if found else np.zeros(0)
-        return times[(times >= samples[0]) & (times <= samples[-1])]
-    if hasattr(trajectory, "points") and hasattr(trajectory, "times") and len(samples) > 1:
-        start, length = samples[:-1], np.diff(samples)
+        return inside(np.concatenate(found)), True
+    if isinstance(trajectory, QuinticTrajectory):
+        own = trajectory.times
+        start, length = own[:-1], np.diff(own)
         fractions = np.array([0.5, (3 - np.sqrt(3)) / 6, (3 + np.sqrt(3)) / 6])
-        return (start[:, None] + length[:, None] * fractions).reshape(-1)
+        peaks = (start[:, None] + length[:, None] * fractions).reshape(-1)
+        return inside(np.concatenate([own, peaks])), True
     if len(samples) < 2:
-        return np.zeros(0)
+        return np.zeros(0), False
     fractions = np.linspace(0, 1, 65)[1:-1]
-    return (samples[:-1, None] + np.diff(samples)[:, None] * fractions).reshape(-1)
+    return (samples[:-1, None] + np.diff(samples)[:, None] * fractions).reshape(-1), False
 
 
 #: Default acceleration limit of waypoint segments [rad/s^2] when the scenario gives none.
