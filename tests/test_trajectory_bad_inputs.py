@@ -369,3 +369,34 @@ def test_the_limits_grid_of_an_unknown_kind_is_bounded():
         check_limits(urpc.PaperTrajectory(), urpc.load_robot("rr_planar"), times=[0, 1e9])
     message = str(info.value)
     assert "field 't'" in message and "the longest span accepted is 1000 s" in message
+
+
+# ---------------------------------------------------------------- 10. CSV lines
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        (
+            "t,q1,q2\n0,0,0\n# planner segment 2\n\n0.1,0,0\n0.2,nan,0\n0.3,0,0\n",
+            "field 'q': sample 2, line 6 (t = 0.2 s) is not finite",
+        ),
+        (
+            "t,q1,q2\n0,0,0\n# comment\n# comment\n0.2,0,0\n0.1,0,0\n",
+            "sample 2, line 6 (t = 0.1 s) does not come after t = 0.2 s",
+        ),
+        ("\n# no header\n0,0,0\n\n1,nan,0\n", "sample 1, line 5 (t = 1 s) is not finite"),
+    ],
+)
+def test_csv_errors_name_the_real_line_past_comments_and_blank_lines(tmp_path, text, expected):
+    path = tmp_path / "skips.csv"
+    path.write_text(text)
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(path, 2)
+    assert "skips.csv" in str(info.value) and expected in str(info.value)
+
+
+def test_npz_samples_name_no_line(tmp_path):
+    np.savez(tmp_path / "order.npz", t=[0.0, 0.2, 0.1], q=np.zeros((3, 2)))
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(tmp_path / "order.npz", 2)
+    assert "sample 2 (t = 0.1 s) does not come after" in str(info.value)
+    assert "line" not in info.value.detail

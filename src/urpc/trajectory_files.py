@@ -131,7 +131,6 @@ def _load_csv(path: Path, dof: int | None, joint_names) -> FileTrajectory:
         raise InputError("the file has no samples", path)
     first = [cell.strip() for cell in rows[0][1].split(",")]
     has_header = not _is_number(first[0])
-    header_lines = rows[0][0] if has_header else rows[0][0] - 1
     body = rows[1:] if has_header else rows
     if not body:
         raise InputError("the file has a header but no samples", path)
@@ -165,8 +164,15 @@ def _load_csv(path: Path, dof: int | None, joint_names) -> FileTrajectory:
             "qd": blocks[1] if len(blocks) > 1 else None,
             "qdd": blocks[2] if len(blocks) > 2 else None,
         }
+    # each sample's own line: comment and blank lines between samples are skipped, so a row's
+    # index plus the header's lines would name the wrong one
     return FileTrajectory(
-        table[:, 0], pick["q"], pick["qd"], pick["qdd"], source=path, header_lines=header_lines
+        table[:, 0],
+        pick["q"],
+        pick["qd"],
+        pick["qdd"],
+        source=path,
+        lines=[number for number, _ in body],
     )
 
 

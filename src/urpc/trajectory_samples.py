@@ -25,15 +25,15 @@ class FileTrajectory(Trajectory):
     holds the first, after the last it holds the last at rest.
 
     Attributes:
-        t, q: The samples. source: The file they came from, if any. header_lines: Lines before
-            the first sample in that file (for messages).
+        t, q: The samples. source: The file they came from, if any. lines: The line of that
+            file each sample was read from (a CSV's, for messages; ``None``: not a text file).
     """
 
     kind = "file"
 
-    def __init__(self, t, q, qd=None, qdd=None, *, source=None, header_lines: int = 0):
+    def __init__(self, t, q, qd=None, qdd=None, *, source=None, lines=None):
         self.source = None if source is None else str(source)
-        self.header_lines = header_lines
+        self.lines = None if lines is None else [int(line) for line in lines]
         self.t = self._array("t", t).reshape(-1)
         self.q = self._array("q", q)
         if self.q.ndim == 1:
@@ -199,11 +199,7 @@ class FileTrajectory(Trajectory):
                 )
 
     def describe(self, row: int) -> str:
-        line = (
-            f", line {row + self.header_lines + 1}"
-            if self.source and self.source.endswith(".csv")
-            else ""
-        )
+        line = f", line {self.lines[row]}" if self.lines is not None else ""
         return f"sample {row}{line} (t = {self.t[row]:.6g} s)"
 
     def evaluate(self, t):
