@@ -400,3 +400,61 @@ def test_npz_samples_name_no_line(tmp_path):
         urpc.load_samples(tmp_path / "order.npz", 2)
     assert "sample 2 (t = 0.1 s) does not come after" in str(info.value)
     assert "line" not in info.value.detail
+
+
+# ---------------------------------------------------------------- 11. NPZ members
+def npz_of_members(path, **members):
+    import zipfile
+
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, data in members.items():
+            archive.writestr(f"{name}.npy", data)
+    return path
+
+
+def npy_header(shape, descr="<f8") -> bytes:
+    import io
+
+    buffer = io.BytesIO()
+    np.lib.format.write_array_header_1_0(
+        buffer, {"descr": descr, "fortran_order": False, "shape": shape}
+    )
+    return buffer.getvalue()
+
+
+def test_npz_member_that_is_not_npy_data_names_the_array(tmp_path):
+    path = npz_of_members(tmp_path / "plan.npz", t="garbage", q="garbage")
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(path, 2)
+    message = str(info.value)
+    assert "plan.npz: field 't': array 't' (member t.npy) is not a numpy array" in message
+    assert "numpy.savez" in message
+
+
+def test_npz_header_declaring_too_many_samples_is_refused_before_reading(tmp_path):
+    header = npy_header((10**11,))
+    path = npz_of_members(tmp_path / "bomb.npz", t=header + bytes(64), q=header + bytes(64))
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(path, 2)
+    message = str(info.value)
+    assert "bomb.npz: field 't'" in message and "declares shape (100000000000,)" in message
+    assert "at most 10000000 samples" in message
+
+
+def test_npz_header_declaring_more_than_the_file_holds_is_damaged(tmp_path):
+    t, q = rest_samples()
+    path = npz_of_members(
+        tmp_path / "short.npz",
+        t=npy_header((201,)) + t.tobytes(),
+        q=npy_header((201, 2)) + bytes(8),
+    )
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(path, 2)
+    message = str(info.value)
+    assert "short.npz: field 'q'" in message and "(3216 bytes), but holds 8 bytes" in message
+
+
+def test_npz_compressed_and_fortran_ordered_arrays_still_load(tmp_path):
+    t, q = rest_samples()
+    np.savez_compressed(tmp_path / "c.npz", t=t, q=np.asfortranarray(q), extra=np.array(["x"]))
+    assert np.array_equal(urpc.load_samples(tmp_path / "c.npz", 2).q, q)

@@ -47,14 +47,20 @@ def _load_npz(path: Path, dof: int | None) -> FileTrajectory:
             path,
         )
     try:
-        with np.load(path, allow_pickle=False) as archive:
-            data = {k: archive[k] for k in archive.files}
-    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
+        with zipfile.ZipFile(path) as archive:
+            names = archive.namelist()
+            data = {}
+            for key in _ARRAYS:
+                member = next((m for m in (f"{key}.npy", key) if m in names), None)
+                if member is not None:
+                    with archive.open(member) as stream:
+                        size = archive.getinfo(member).file_size
+                        data[key] = _read_member(stream, size, key, member, path)
+    except (OSError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
         raise InputError(f"not a readable NPZ file ({exc})", path) from None
     if "t" not in data or "q" not in data:
-        raise InputError(
-            f"needs arrays 't' and 'q'; found {', '.join(sorted(data)) or 'none'}", path
-        )
+        found = sorted(name.removesuffix(".npy") for name in names)
+        raise InputError(f"needs arrays 't' and 'q'; found {', '.join(found) or 'none'}", path)
     t = _numbers(data["t"], "t", path)
     if t.ndim == 2 and t.shape[1] == 1:
         t = t[:, 0]
@@ -80,6 +86,75 @@ def _load_npz(path: Path, dof: int | None) -> FileTrajectory:
     return FileTrajectory(t, q, derivatives.get("qd"), derivatives.get("qdd"), source=path)
 
 
+#: The arrays an NPZ trajectory is read from (others in the file are not read).
+_ARRAYS = ("t", "q", "qd", "qdd")
+
+#: Most samples (rows) read from an NPZ array: 2.8 h at 1 kHz. The .npy header is read first, so
+#: a larger declaration is refused before its memory is asked for.
+MAX_SAMPLES = 10**7
+
+#: Most values read from one NPZ array (800 MB of doubles: 10^7 samples of 10 joints).
+MAX_VALUES = 10**8
+
+
+def _read_member(stream, size: int, key: str, member: str, path: Path) -> np.ndarray:
+    """The array in the NPZ's member ``member`` (``size`` bytes uncompressed), its .npy header
+    checked before any data is read: text or other bytes saved under ``t.npy`` are no array, and
+    a header may declare more samples than the file holds, or than memory does."""
+    what = f"array '{key}' (member {member})"
+    try:
+        version = np.lib.format.read_magic(stream)
+    except ValueError:
+        raise InputError(
+            f"{what} is not a numpy array: it does not start with the .npy header; save the "
+            "file with numpy.savez(path, t=..., q=...)",
+            path,
+            key,
+        ) from None
+    readers = {
+        (1, 0): np.lib.format.read_array_header_1_0,
+        (2, 0): np.lib.format.read_array_header_2_0,
+    }
+    if version not in readers:
+        raise InputError(
+            f"{what} is a .npy file of version {version[0]}.{version[1]}; valid: 1.0, 2.0 "
+            "(what numpy.savez writes for arrays of numbers)",
+            path,
+            key,
+        )
+    try:
+        shape, fortran_order, dtype = readers[version](stream)
+    except ValueError as exc:
+        raise InputError(f"{what} has a damaged .npy header ({exc})", path, key) from None
+    if dtype.kind not in "biuf":
+        raise InputError(_not_numbers(key, dtype), path, key)
+    samples = shape[0] if shape else 1
+    values = int(np.prod(shape, dtype=object))
+    if samples > MAX_SAMPLES or values > MAX_VALUES:
+        raise InputError(
+            f"{what} declares shape {tuple(shape)}: {samples} samples, {values} values; at most "
+            f"{MAX_SAMPLES} samples and {MAX_VALUES} values are read: split the trajectory",
+            path,
+            key,
+        )
+    needed, held = values * dtype.itemsize, size - stream.tell()
+    if needed != held:
+        raise InputError(
+            f"{what} declares shape {tuple(shape)} of {dtype.name} ({needed} bytes), but holds "
+            f"{held} bytes: the file is damaged or truncated",
+            path,
+            key,
+        )
+    data = stream.read(needed)
+    if len(data) != needed:
+        raise InputError(f"{what} ends after {len(data)} of {needed} bytes", path, key)
+    return np.frombuffer(data, dtype).reshape(shape, order="F" if fortran_order else "C")
+
+
+def _not_numbers(key: str, dtype: np.dtype) -> str:
+    return f"array '{key}' holds {dtype.name} values (dtype {dtype.str}); expected numbers"
+
+
 def _shape(values: np.ndarray) -> str:
     return str(tuple(values.shape))
 
@@ -87,12 +162,7 @@ def _shape(values: np.ndarray) -> str:
 def _numbers(values: np.ndarray, key: str, path: Path) -> np.ndarray:
     """``values`` as floats, or an error naming the array and what it holds."""
     if values.dtype.kind not in "biuf":
-        raise InputError(
-            f"array '{key}' holds {values.dtype.name} values (dtype {values.dtype.str}); expected "
-            "numbers",
-            path,
-            key,
-        )
+        raise InputError(_not_numbers(key, values.dtype), path, key)
     return np.asarray(values, dtype=float)
 
 
