@@ -458,3 +458,62 @@ def test_npz_compressed_and_fortran_ordered_arrays_still_load(tmp_path):
     t, q = rest_samples()
     np.savez_compressed(tmp_path / "c.npz", t=t, q=np.asfortranarray(q), extra=np.array(["x"]))
     assert np.array_equal(urpc.load_samples(tmp_path / "c.npz", 2).q, q)
+
+
+# ---------------------------------------------------------------- 12. Python API arguments
+def test_load_samples_arguments_of_the_wrong_type(tmp_path):
+    t, q = rest_samples()
+    path = write_csv(tmp_path / "plan.csv", "t,q1,q2", t, q)
+    with pytest.raises(urpc.InputError, match="field 'path': expected a file path .* NoneType"):
+        urpc.load_samples(None)
+    with pytest.raises(urpc.InputError, match="field 'joint_names': 5 is not a list of joint"):
+        urpc.load_samples(path, 2, 5)
+    with pytest.raises(urpc.InputError, match="field 'dof': 2.0 must be an integer >= 1"):
+        urpc.load_samples(path, 2.0)
+    assert np.array_equal(urpc.load_samples(path, 2, None).q, urpc.load_samples(path, 2).q)
+
+
+def test_headerless_csv_with_zero_joints_is_refused(tmp_path):
+    path = tmp_path / "plain.csv"
+    path.write_text("0,0,0\n1,0,0\n")
+    with pytest.raises(urpc.InputError, match="field 'dof': 0 must be an integer >= 1"):
+        urpc.load_samples(path, 0)
+
+
+@pytest.mark.parametrize("t", ["a", float("nan"), None])
+def test_a_reference_at_a_time_that_is_not_a_number(t):
+    trajectory = urpc.from_samples([0, 1], [[0, 0], [1, 1]])
+    with pytest.raises(urpc.InputError, match=r"field 't': the time .* is not a number \[s\]"):
+        trajectory.reference(t)
+
+
+def test_waypoints_of_zero_joints_are_refused():
+    with pytest.raises(urpc.InputError, match=r"field 'points': points has shape \(2, 0\)"):
+        urpc.WaypointTrajectory(np.zeros((2, 0)))
+
+
+@pytest.mark.parametrize(
+    ("q_start", "trajectory", "duration", "expected"),
+    [
+        ([0, 0, 0], urpc.PaperTrajectory(), 1.0, "field 'q_start': [0, 0, 0] has shape (3,)"),
+        ([0, 0], "paper", 1.0, "field 'trajectory': expected a urpc.Trajectory, got str"),
+        ([0, 0], urpc.PaperTrajectory(), 0.0, "field 'duration': 0.0 is out of range"),
+        ([0, 0], urpc.PaperTrajectory(), 1e-300, "field 'duration': the approach from q_start"),
+    ],
+)
+def test_approach_arguments_are_checked(q_start, trajectory, duration, expected):
+    from urpc.trajectory_sources import Approach
+
+    with pytest.raises(urpc.InputError) as info:
+        Approach(q_start, trajectory, duration)
+    assert expected in str(info.value)
+
+
+def test_a_streamed_target_whose_move_overflows_is_refused_and_not_taken():
+    streamed = urpc.StreamedReference([0, 0], velocity_limit=1, acceleration_limit=1)
+    with pytest.raises(urpc.InputError, match="field 'target': the move to .* give a nearer"):
+        streamed.set_target([1e308, 0], 0.0)
+    assert np.array_equal(streamed.reference(0.5).q, [0, 0]) and streamed.updates == 0
+    with pytest.raises(urpc.InputError, match="field 'duration': the move to .* over 1e-300 s"):
+        streamed.set_target([1, 0], 0.0, 1e-300)
+    assert np.all(np.isfinite(streamed.reference(1e-301).qdd))

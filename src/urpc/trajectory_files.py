@@ -4,6 +4,7 @@ checked column by column (:func:`load_samples`).
 
 from __future__ import annotations
 
+import os
 import re
 import zipfile
 import zlib
@@ -13,6 +14,7 @@ import numpy as np
 
 from .errors import InputError, no_file
 from .trajectory_samples import FileTrajectory
+from .validation import checked_count
 
 _NAME = re.compile(r"^(qdd|qd|q)[_\s-]?(\d+)$")
 
@@ -23,11 +25,28 @@ def load_samples(path: str | Path, dof: int | None = None, joint_names=()) -> Fi
     after ``t``, each joint once; or no header and ``1 + n``, ``1 + 2n`` or ``1 + 3n`` columns) or
     an NPZ (arrays ``t``, ``q`` and optionally ``qd``, ``qdd``, each ``(samples, joints)``).
 
+    ``dof``: the joints expected (an integer >= 1; ``None``: as many as the file has);
+    ``joint_names``: the joints' names a header may use (``None``: none).
+
     Raises:
         InputError: a missing or unreadable file, wrong or repeated columns, a row with too many
             or too few values, a non-finite value, times that do not increase (the sample, and in
-            a CSV the line, is named).
+            a CSV the line, is named); a path, ``dof`` or names of the wrong type.
     """
+    if not isinstance(path, str | os.PathLike):
+        raise InputError(
+            f"expected a file path (str or pathlib.Path), got {type(path).__name__}", field="path"
+        )
+    if dof is not None:
+        dof = checked_count("dof", dof, 1, " (the robot's joints; None: the file's)")
+    names = [] if joint_names is None else _iterable(joint_names)
+    if isinstance(joint_names, str | bytes) or not all(isinstance(n, str) for n in names):
+        raise InputError(
+            f"{joint_names!r:.80} is not a list of joint names (texts); give robot.joint_names "
+            "or None",
+            field="joint_names",
+        )
+    joint_names = tuple(names)
     path = Path(path)
     if not path.is_file():
         raise InputError(no_file(path, "trajectory file"), path)
@@ -36,6 +55,14 @@ def load_samples(path: str | Path, dof: int | None = None, joint_names=()) -> Fi
     if path.suffix.lower() != ".csv":
         raise InputError(f"unknown trajectory file type '{path.suffix}'; valid: .csv, .npz", path)
     return _load_csv(path, dof, joint_names)
+
+
+def _iterable(values) -> list:
+    """``values`` as a list, or ``[None]`` (not a name) when it cannot be iterated."""
+    try:
+        return list(values)
+    except TypeError:
+        return [None]
 
 
 # ============================================================================ NPZ

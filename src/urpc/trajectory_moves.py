@@ -23,7 +23,7 @@ from .trajectories import (
     Reference,
     Trajectory,
 )
-from .validation import number_in, per_joint, positive_number
+from .validation import check_type, number_in, per_joint, positive_number
 
 
 # ============================================================================ waypoints
@@ -91,6 +91,11 @@ class WaypointTrajectory(QuinticTrajectory):
                 "number of joints",
                 field="points",
             ) from None
+        if points.ndim != 2 or points.shape[1] == 0:
+            raise InputError(
+                f"points has shape {points.shape}; give (points, joints), at least one joint",
+                field="points",
+            )
         if times is None:
             if len(points) < 2:
                 raise InputError("need at least 2 waypoints", field="points")
@@ -156,18 +161,28 @@ class StreamedReference(Trajectory):
         if duration is not None:
             duration = positive_number("duration", duration, "a finite duration > 0 [s] or None")
         current = self.reference(t)
-        if duration is None:
-            points = np.stack([current.q, q])
-            duration = float(
-                segment_durations(
-                    points, self.velocity_limit, self.acceleration_limit, self.minimum
-                )[0]
-            )
-            # a moving start needs time to turn around: not shorter than stopping at the limit
-            with np.errstate(divide="ignore", invalid="ignore"):
+        given = duration is not None
+        # a finite target far away (1e308) or a tiny duration (1e-300) overflows the quintic:
+        # refused below, by name, instead of a NaN reference
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            if duration is None:
+                points = np.stack([current.q, q])
+                duration = float(
+                    segment_durations(
+                        points, self.velocity_limit, self.acceleration_limit, self.minimum
+                    )[0]
+                )
+                # a moving start needs time to turn around: not shorter than stopping at the limit
                 stop = np.nan_to_num(np.abs(current.qd) / self.acceleration_limit, posinf=0.0)
-            duration = max(duration, 2.0 * float(stop.max()))
-        coefficients = _quintic(current.q, current.qd, current.qdd, q, duration)
+                duration = max(duration, 2.0 * float(stop.max()))
+            coefficients = _quintic(current.q, current.qd, current.qdd, q, duration)
+        if not (np.isfinite(duration) and np.all(np.isfinite(coefficients))):
+            raise InputError(
+                f"the move to {q.tolist()} over {duration:.3g} s overflows double precision (its "
+                "position, velocity or acceleration is not finite): give "
+                + ("a longer duration or a nearer target" if given else "a nearer target"),
+                field="duration" if given else "target",
+            )
         with self._lock:
             self._segment = (float(t), float(t) + duration, coefficients, q)
             self.updates += 1
@@ -191,14 +206,20 @@ class Approach(Trajectory):
     then ``trajectory`` shifted by ``duration``."""
 
     def __init__(self, q_start, trajectory: Trajectory, duration: float):
+        check_type("trajectory", trajectory, Trajectory, "a urpc.Trajectory")
         self.dof = trajectory.dof
         self.kind = trajectory.kind
         self.trajectory = trajectory
-        self.duration = float(duration)
+        q_start = per_joint("q_start", q_start, self.dof, "rad", broadcast=False)
+        self.duration = positive_number("duration", duration, "a finite duration > 0 [s]")
         start = trajectory.reference(0.0)
-        self.segment = QuinticTrajectory(
-            np.stack([np.asarray(q_start, float), start.q]), [0.0, self.duration]
-        )
+        try:
+            self.segment = QuinticTrajectory(np.stack([q_start, start.q]), [0.0, self.duration])
+        except InputError as exc:
+            raise InputError(
+                f"the approach from q_start to the trajectory's start: {exc.detail}",
+                field="duration",
+            ) from None
 
     def evaluate(self, t):
         t = np.asarray(t, dtype=float)
