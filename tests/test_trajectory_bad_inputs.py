@@ -517,3 +517,56 @@ def test_a_streamed_target_whose_move_overflows_is_refused_and_not_taken():
     with pytest.raises(urpc.InputError, match="field 'duration': the move to .* over 1e-300 s"):
         streamed.set_target([1, 0], 0.0, 1e-300)
     assert np.all(np.isfinite(streamed.reference(1e-301).qdd))
+
+
+# ---------------------------------------------------------------- 13. what a message asks for
+def test_a_unit_in_the_time_header_is_told_what_to_write(tmp_path):
+    path = tmp_path / "units.csv"
+    path.write_text("t [s],q1,q2\n0,0,0\n0.1,0,0\n")
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(path, 2)
+    message = str(info.value)
+    assert "units.csv: field 't': the first column is 't [s]'; expected 't' or 'time'" in message
+    assert "with no unit in the name" in message
+
+
+@pytest.mark.parametrize(
+    ("text", "name"), [("t;q1;q2\n0;0;0\n0.1;0;0\n", "semicolons"), ("0;0,1;0\n", "semicolons")]
+)
+def test_a_semicolon_csv_is_told_to_use_commas(tmp_path, text, name):
+    path = tmp_path / "semi.csv"
+    path.write_text(text)
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(path, 2)
+    assert f"semi.csv: line 1 separates its values with {name}" in str(info.value)
+    assert "comma-separated" in str(info.value)
+
+
+def test_a_tab_separated_csv_is_told_to_use_commas(tmp_path):
+    path = tmp_path / "tabs.csv"
+    path.write_text("t\tq1\tq2\n0\t0\t0\n0.1\t0\t0\n")
+    with pytest.raises(urpc.InputError, match="line 1 separates its values with tabs"):
+        urpc.load_samples(path, 2)
+
+
+@pytest.mark.parametrize("cell", ["1_0", "١", "0x10"])
+def test_csv_values_python_alone_would_read_are_refused(tmp_path, cell):
+    path = tmp_path / "odd.csv"
+    path.write_text(f"t,q1,q2\n0,0,0\n1,{cell},0\n", encoding="utf-8")
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(path, 2)
+    assert f"odd.csv: line 3, column 'q1': '{cell}' is not a number" in str(info.value)
+
+
+def test_a_device_is_not_a_regular_file(tmp_path):
+    message = refused(tmp_path, {"kind": "file", "path": "/dev/zero"})
+    assert "field 'trajectory.path': trajectory file '/dev/zero' is not a regular file" in message
+    assert "does not exist" not in message
+    with pytest.raises(urpc.InputError, match="/dev/zero: trajectory file is not a regular file"):
+        urpc.load_samples("/dev/zero", 2)
+
+
+@pytest.mark.parametrize("q", [[[0, 0], [1, 1j]], np.zeros((2, 2), complex)])
+def test_complex_samples_are_refused_not_cut_to_their_real_part(q):
+    with pytest.raises(urpc.InputError, match="field 'q': q holds complex numbers"):
+        urpc.from_samples([0, 1], q)

@@ -43,9 +43,14 @@ class SimulationError(UrpcError, RuntimeError):
 
 def no_file(path: str | Path, what: str | None = None) -> str:
     """Why ``path`` cannot be read as a file: ``"<what> is a folder, not a file"`` for a folder,
-    else ``"<what> does not exist"`` (``what`` defaults to nothing, resp. ``"file"``)."""
-    if Path(path).expanduser().is_dir():
+    ``"<what> is not a regular file (...)"`` for a device, pipe or socket (``/dev/zero`` exists:
+    "does not exist" would send the user looking for a typo), else ``"<what> does not exist"``
+    (``what`` defaults to nothing, resp. ``"file"``)."""
+    path = Path(path).expanduser()
+    if path.is_dir():
         return (f"{what} " if what else "") + "is a folder, not a file"
+    if path.exists():
+        return (f"{what} " if what else "") + "is not a regular file (a device, a pipe or a socket)"
     return f"{what or 'file'} does not exist"
 
 

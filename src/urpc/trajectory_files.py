@@ -18,6 +18,13 @@ from .validation import checked_count
 
 _NAME = re.compile(r"^(qdd|qd|q)[_\s-]?(\d+)$")
 
+#: A number as a CSV cell holds it: decimal digits with a '.' point and an optional exponent, or
+#: nan/inf (refused later, by line, as not finite). Python's float() also reads '1_0' as 10 and
+#: other scripts' digits: a planner's '1_0' is a typo, not ten.
+_NUMBER = re.compile(
+    r"^[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|nan|inf|infinity)$", re.IGNORECASE
+)
+
 
 def load_samples(path: str | Path, dof: int | None = None, joint_names=()) -> FileTrajectory:
     """Read a trajectory file: a CSV (a header row ``t, q1..qn[, qd1..qdn[, qdd1..qddn]]``, names
@@ -227,6 +234,13 @@ def _load_csv(path: Path, dof: int | None, joint_names) -> FileTrajectory:
     if not rows:
         raise InputError("the file has no samples", path)
     first = [cell.strip() for cell in rows[0][1].split(",")]
+    for separator, name in ((";", "semicolons"), ("\t", "tabs")):
+        if separator in rows[0][1] and (separator == ";" or len(first) == 1):
+            raise InputError(
+                f"line {rows[0][0]} separates its values with {name}; a trajectory CSV is "
+                "comma-separated, with '.' as the decimal point (t,q1,q2 then 0.1,0.25,-0.5)",
+                path,
+            )
     has_header = not _is_number(first[0])
     body = rows[1:] if has_header else rows
     if not body:
@@ -239,13 +253,15 @@ def _load_csv(path: Path, dof: int | None, joint_names) -> FileTrajectory:
             what = "the header has" if has_header else "the first row has"
             raise InputError(f"line {number} has {len(cells)} values; {what} {width} columns", path)
         for j, cell in enumerate(cells):
-            try:
-                table[i, j] = float(cell)
-            except ValueError:
+            if not _NUMBER.match(cell):
                 column = f"'{first[j]}'" if has_header else str(j + 1)
                 raise InputError(
-                    f"line {number}, column {column}: '{cell}' is not a number", path
-                ) from None
+                    f"line {number}, column {column}: '{cell}' is not a number (write digits "
+                    "with a '.' decimal point and an optional exponent, e.g. -0.25 or 1e-3; no "
+                    "'_' or ';')",
+                    path,
+                )
+            table[i, j] = float(cell)
     columns = table.shape[1]
     if has_header:
         pick = _columns_by_name(first, table, dof, tuple(joint_names), path)
@@ -278,7 +294,12 @@ def _columns_by_name(header, table, dof, joint_names, path) -> dict:
     ``q1..qn`` (or ``q0..q(n-1)``, or the joints' names), ``qd1..``, ``qdd1..``; an unknown or
     repeated name is an error listing the valid ones."""
     if header[0].lower() not in ("t", "time"):
-        raise InputError(f"the first column is '{header[0]}'; expected t [s]", path, "t")
+        raise InputError(
+            f"the first column is '{header[0]}'; expected 't' or 'time' (the times in seconds, "
+            "with no unit in the name)",
+            path,
+            "t",
+        )
     names = list(joint_names) if dof is None or len(joint_names) == dof else []
     parsed = []  # (column, name, kind, number or joint name)
     for column, name in enumerate(header[1:], start=1):
@@ -342,6 +363,9 @@ def _columns_by_name(header, table, dof, joint_names, path) -> dict:
 
 
 def _is_number(text: str) -> bool:
+    """Whether the first row starts with a number, so has no header: Python's float(), broader
+    than :data:`_NUMBER`, so that a first row of '1_0' is a row whose value is refused, not a
+    header whose name is."""
     try:
         float(text)
     except ValueError:

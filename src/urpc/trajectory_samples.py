@@ -154,15 +154,24 @@ class FileTrajectory(Trajectory):
 
     def _array(self, name: str, values, shape: tuple | None = None) -> np.ndarray:
         """``values`` as a float array (of ``shape``, when given: a single joint's column may
-        be a plain vector), or one error naming ``name``."""
+        be a plain vector), or one error naming ``name``: complex numbers (whose imaginary part
+        numpy would drop, with a mere warning) and texts (which it would parse) are refused."""
         try:
-            array = np.asarray(values, dtype=float)
+            raw = np.asarray(values)
+            array = None if raw.dtype.kind in "cUS" else np.asarray(raw, dtype=float)
         except (TypeError, ValueError):
             raise InputError(
                 f"{name} is not an array of numbers (got {type(values).__name__})",
                 self.source,
                 name,
             ) from None
+        if array is None:
+            what = "complex numbers" if raw.dtype.kind == "c" else "texts"
+            raise InputError(
+                f"{name} holds {what} (dtype {raw.dtype.name}); give real numbers",
+                self.source,
+                name,
+            )
         if shape is not None:
             if array.ndim == 1 and shape[1] == 1:
                 array = array[:, None]
