@@ -204,7 +204,7 @@ class FileTrajectory(Trajectory):
                     f"trajectory from q alone {end}s at rest: the spline stops within one sample "
                     f"interval, with accelerations the data does not have; extend the samples to "
                     f"rest, or give qd",
-                    stacklevel=3,
+                    stacklevel=4,  # the caller of FileTrajectory(), past _fit
                 )
 
     def describe(self, row: int) -> str:
