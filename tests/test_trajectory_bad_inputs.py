@@ -481,8 +481,16 @@ def test_headerless_csv_with_zero_joints_is_refused(tmp_path):
 
 
 @pytest.mark.parametrize("t", ["a", float("nan"), None])
-def test_a_reference_at_a_time_that_is_not_a_number(t):
-    trajectory = urpc.from_samples([0, 1], [[0, 0], [1, 1]])
+@pytest.mark.parametrize(
+    "trajectory",
+    [
+        urpc.from_samples([0, 1], [[0, 0], [1, 1]]),
+        urpc.WaypointTrajectory([[0, 0], [1, 1]], [0, 1]),
+        urpc.StreamedReference([0, 0]),
+    ],
+    ids=["samples", "waypoints", "streamed"],
+)
+def test_a_reference_at_a_time_that_is_not_a_number(t, trajectory):
     with pytest.raises(urpc.InputError, match=r"field 't': the time .* is not a number \[s\]"):
         trajectory.reference(t)
 

@@ -61,8 +61,9 @@ class Trajectory(ABC):
         """``(q, qd, qdd)`` at time(s) ``t`` [s]: each of shape ``np.shape(t) + (dof,)``."""
 
     def reference(self, t: float) -> Reference:
-        """The reference at one time ``t`` [s]."""
-        q, qd, qdd = self.evaluate(float(t))
+        """The reference at one time ``t`` [s] (a text or NaN is refused: its reference would be
+        a numpy error or NaN)."""
+        q, qd, qdd = self.evaluate(as_time(t))
         return Reference(q=q, qd=qd, qdd=qdd)
 
     def jerk_bound(self, start: np.ndarray, stop: np.ndarray) -> np.ndarray:
@@ -124,6 +125,21 @@ class Trajectory(ABC):
         radius_qd = h * np.abs(qdd) + 0.5 * h * h * J + rounding(qd)
         radius_q = h * np.abs(qd) + 0.5 * h * h * np.abs(qdd) + h**3 * J / 6 + rounding(q)
         return q, radius_q, qd, radius_qd, qdd, radius_qdd, J
+
+
+def as_time(t) -> float:
+    """``t`` as a float time [s]; a text, or NaN (whose reference would be NaN), is refused.
+
+    Raises:
+        InputError: ``t`` is not a number (field ``t``).
+    """
+    try:
+        value = float(t)
+    except (TypeError, ValueError):
+        raise InputError(f"the time {t!r} is not a number [s]", field="t") from None
+    if isinstance(t, str | bytes) or value != value:
+        raise InputError(f"the time {t!r} is not a number [s]", field="t")
+    return value
 
 
 #: Smallest step between two sample or waypoint times, relative to the largest time (and at least

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
-from .trajectories import Reference, Trajectory, check_time_steps
+from .trajectories import Reference, Trajectory, as_time, check_time_steps
 
 
 class FileTrajectory(Trajectory):
@@ -221,7 +221,7 @@ class FileTrajectory(Trajectory):
         return q, qd, qdd
 
     def reference(self, t: float) -> Reference:
-        t = _time(t)
+        t = as_time(t)
         if self.t[0] <= t <= self.t[-1]:
             return Reference(self._spline(t), self._velocity(t), self._acceleration(t))
         q, qd, qdd = self.evaluate(float(t))
@@ -294,17 +294,6 @@ class FileTrajectory(Trajectory):
 
     def __repr__(self) -> str:
         return f"FileTrajectory({len(self.t)} samples, dof={self.dof}, t=[{self.t[0]:g}, {self.t[-1]:g}] s)"
-
-
-def _time(t) -> float:
-    """``t`` as a float time [s]; a text, or NaN (whose reference would be NaN), is refused."""
-    try:
-        value = float(t)
-    except (TypeError, ValueError):
-        raise InputError(f"the time {t!r} is not a number [s]", field="t") from None
-    if isinstance(t, str | bytes) or value != value:
-        raise InputError(f"the time {t!r} is not a number [s]", field="t")
-    return value
 
 
 def _quintic_bpoly(t, q, qd, qdd):
