@@ -1,10 +1,15 @@
 """The watchdogs on both sides, on a fake clock: the loop's late-cycle budget and silence limit,
 the virtual arm's 20 ms torque timeout, and whole runs stopped by them."""
 
+import dataclasses
+
 import numpy as np
+import pytest
 
 import urpc
+from urpc.errors import InputError
 from urpc.robot.loop import ControlLoop
+from urpc.robot.packet import seq_wrap
 from urpc.robot.runner import run
 from urpc.robot.safety import SafetyLayer
 from urpc.robot.virtual import FakeClock, LockstepRobot, VirtualArm
@@ -104,3 +109,117 @@ def test_a_silent_robot_trips_the_loop(rr_rig):
     )
     assert report.ending == "watchdog" and "no state from the robot" in report.message
     assert report.cycles == 51  # samples 0..50, then silence
+
+
+def test_the_silence_limit_is_not_stretched_by_the_late_budget():
+    # It was max(50 ms, (late_budget + 1) periods): 100 s with the loaded machine's budget.
+    assert Watchdog(1e-3, late_budget=100000).silence == 0.05
+    assert Watchdog(0.1).silence == 0.5  # a slow robot: five of its periods
+    with pytest.raises(InputError, match="less than 2 periods") as caught:
+        Watchdog(1e-3, silence=1.5e-3)
+    assert caught.value.field == "silence"
+
+
+def silent_after(samples):
+    class Silent(LockstepRobot):
+        def read_state(self, timeout):
+            if self.arm.seq >= samples:
+                self.clock.advance(timeout)
+                return None
+            return super().read_state(timeout)
+
+    return Silent
+
+
+def test_a_silent_robot_ends_a_run_with_a_huge_late_budget_within_the_silence_limit(rr_rig):
+    robot, plant, controller = rr_rig
+    clock = FakeClock()
+    silent = silent_after(100)(VirtualArm(plant, 1e-3), clock, 1e-4)
+    loop = ControlLoop(controller, urpc.PaperTrajectory())
+    report = run(
+        silent,
+        loop,
+        SafetyLayer.for_robot(robot, 1e-3),
+        Watchdog(1e-3, late_budget=100000),
+        1.0,
+        clock=clock,
+    )
+    assert report.ending == "watchdog" and "no state from the robot for 5" in report.message
+    assert clock() < 0.1 + 0.05 + 0.002  # the last state, the 50 ms limit, one read timeout
+
+
+class JumpingSeq(LockstepRobot):
+    """From sample 100 on, sequence numbers 2**31 + 5 ahead: older in serial arithmetic."""
+
+    def read_state(self, timeout):
+        state = super().read_state(timeout)
+        if self.arm.seq < 100:
+            return state
+        return dataclasses.replace(state, seq=seq_wrap(state.seq + 2**31 + 5))
+
+
+def test_stale_states_are_silence_and_the_message_says_so(rr_rig):
+    robot, plant, controller = rr_rig
+    clock = FakeClock()
+    jumping = JumpingSeq(VirtualArm(plant, 1e-3), clock, 1e-4)
+    loop = ControlLoop(controller, urpc.PaperTrajectory())
+    safety = SafetyLayer.for_robot(robot, 1e-3)
+    dog = Watchdog(1e-3)
+    report = run(jumping, loop, safety, dog, 1.0, clock=clock)
+    assert report.ending == "watchdog", report.message
+    assert report.cycles == 100 and clock() < 0.1 + 0.05 + 0.002
+    assert "no new state from the robot for 5" in report.message
+    assert "stale states arrived, their sequence numbers not advancing past 99" in report.message
+    assert dog.stale_states == safety.counts["stale_state"] >= 49
+    assert report.watchdog["stale_states"] == dog.stale_states
+
+
+class Slow(LockstepRobot):
+    """Fresh states, one seq apart, but three periods of clock time apart."""
+
+    def read_state(self, timeout):
+        if self._pending_read:
+            self.clock.advance(3e-3)
+        return super().read_state(timeout)
+
+
+def test_a_run_ends_by_its_duration_plus_the_grace_on_the_clock(rr_rig):
+    robot, plant, controller = rr_rig
+    clock = FakeClock()
+    arm = VirtualArm(plant, 1e-3)
+    slow = Slow(arm, clock, 1e-4)
+    loop = ControlLoop(controller, urpc.PaperTrajectory())
+    report = run(slow, loop, SafetyLayer.for_robot(robot, 1e-3), Watchdog(1e-3), 1.0, clock=clock)
+    assert report.ending == "watchdog" and "of clock time for 0.66" in report.message
+    assert "allowed: 2 s" in report.message
+    assert 2.0 < clock() < 2.01  # duration 1 s + the grace of 1 s
+
+
+class Overtaken(LockstepRobot):
+    """Every other sample overtaken by the next (a loaded loop answers the newest)."""
+
+    def read_state(self, timeout):
+        state = super().read_state(timeout)
+        if self.arm.seq % 2:
+            self.send_torque(state.seq, np.zeros(self.dof))  # keep the arm's schedule
+            state = super().read_state(timeout)
+        return state
+
+
+def test_a_run_ends_when_loop_time_reaches_the_duration(rr_rig):
+    # It counted answered cycles: with every other sample overtaken it ran twice its duration.
+    robot, plant, controller = rr_rig
+    clock = FakeClock()
+    loop = ControlLoop(controller, urpc.PaperTrajectory())
+    dog = Watchdog(1e-3)
+    report = run(
+        Overtaken(VirtualArm(plant, 1e-3), clock, 1e-4),
+        loop,
+        SafetyLayer.for_robot(robot, 1e-3),
+        dog,
+        0.2,
+        clock=clock,
+    )
+    assert report.ok, report.message
+    assert loop.series()["t"][-1] == pytest.approx(0.2) and dog.lost_samples == 100
+    assert report.cycles == 101

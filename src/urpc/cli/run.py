@@ -103,7 +103,15 @@ def register(commands) -> None:
         type=non_negative_int,
         default=5,
         metavar="N",
-        help="consecutive late cycles tolerated (5)",
+        help="consecutive late cycles tolerated (5); does not lengthen --silence-ms",
+    )
+    p.add_argument(
+        "--silence-ms",
+        type=positive_float,
+        metavar="MS",
+        help="stop when no fresh state (one with a newer sequence number) arrives for MS [ms] "
+        "(50, at least 5 periods; at least 2 periods when given). The run also stops when it "
+        "takes longer than its duration plus max(1 s, a quarter of it)",
     )
     p.add_argument(
         "--deadline-ms",
@@ -322,10 +330,18 @@ def run_robot(args) -> int:
         torque_rate_limit=args.torque_rate,
         safe_mode=args.safe_mode,
     )
+    if args.silence_ms is not None and args.silence_ms * 1e-3 < 2 * period:
+        raise InputError(
+            f"{args.silence_ms:g} ms is less than two of the controller's periods "
+            f"({2e3 * period:g} ms): the watchdog would trip between two states; give at least "
+            f"{2e3 * period:g}",
+            field="silence-ms",
+        )
     watchdog = Watchdog(
         period,
         late_budget=args.late_budget,
         deadline=None if args.deadline_ms is None else args.deadline_ms * 1e-3,
+        silence=None if args.silence_ms is None else args.silence_ms * 1e-3,
     )
     robot = UdpRobot(f"udp://{address[0]}:{address[1]}", setup.robot.dof, period)
     first = robot.read_state(5.0)
@@ -384,6 +400,7 @@ def run_robot(args) -> int:
         "deadline_misses": report.watchdog["late_cycles"],
         "deadline_miss_rate": report.watchdog["late_fraction"],
         "lost_samples": report.watchdog["lost_samples"],
+        "stale_states": report.watchdog["stale_states"],
         "worst_response_ms": report.watchdog["worst_response_s"] * 1e3,
         "safety_interventions": report.safety["total"],
         "interventions": report.safety["counts"],

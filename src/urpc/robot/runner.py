@@ -4,7 +4,8 @@ watch the deadlines, until the duration is over or something stops the run.
 Per cycle (``docs/robot.md``)::
 
     state = robot.read_state(timeout)          # None: nothing arrived -> watchdog.check_silence
-    watchdog.arrived(state.seq, state.received)  # stale (not newer): ignored, counted
+    watchdog.arrived(state.seq, state.received)  # stale (not newer): ignored, counted,
+                                               # -> watchdog.check_silence (fresh states only)
     safety.check_state(t, q, qd)               # fault -> safe command, stop
     tau = loop.step(t, q, qd)                  # the controller
     tau, fault = safety.limit(t, tau)          # clip (counted); non-finite -> safe command, stop
@@ -15,8 +16,10 @@ Loop time is ``t = (seq - seq_0) period``: a lost sample leaves a gap in time, n
 difference is taken in serial-number arithmetic (:func:`urpc.robot.packet.seq_diff`) and summed
 sample by sample, so loop time keeps counting across the wrap of the 32-bit ``seq`` (about 49.7
 days at 1 kHz) and past it.
-Every loop is bounded: by the number of cycles of the duration, and by the watchdog's silence
-limit while nothing arrives. The clock is a parameter (``time.monotonic`` by default), which lets
+The run ends when loop time reaches the duration (a sample overtaken by a newer one does not
+make it longer). Every loop is bounded: by the duration in loop time, by the watchdog's silence
+limit while no fresh state arrives (stale ones do not count), and by :func:`overrun_grace` on the
+clock: a run takes at most its duration plus ``max(1 s, duration / 4)``. The clock is a parameter (``time.monotonic`` by default), which lets
 tests drive a whole run on a fake clock.
 """
 
@@ -90,8 +93,11 @@ def run(
     first: RobotState | None = None,
 ) -> RunReport:
     """Drive ``robot`` with ``loop`` for ``duration`` [s] of loop time, behind ``safety`` and
-    ``watchdog``; the robot is stopped (:meth:`RobotInterface.stop`) however the run ends.
-    ``first``: a state already read (its sample is the run's first)."""
+    ``watchdog``; the robot is stopped (:meth:`RobotInterface.stop`) however the run ends. The
+    run ends once loop time reaches ``duration``; it is stopped with the safe command when no
+    fresh state arrives for ``watchdog.silence``, or when it has taken more than ``duration +
+    overrun_grace(duration)`` on ``clock``. ``first``: a state already read (its sample is the
+    run's first)."""
     duration = positive_number("duration", duration, "a finite number > 0 [s]")
     start_timeout = positive_number("start_timeout", start_timeout, "a finite number > 0 [s]")
     if safety.dof != loop.dof:
@@ -102,7 +108,8 @@ def run(
             field="safety",
         )
     period = loop.period
-    cycles_wanted = max(1, math.ceil(duration / period - 1e-9)) + 1
+    last_index = max(1, math.ceil(duration / period - 1e-9))  # the run's last sample, from 0
+    allowed = duration + overrun_grace(duration)  # clock time the run may take
     read_timeout = min(period, watchdog.silence)
     try:
         state = robot.read_state(start_timeout) if first is None else first
@@ -121,12 +128,25 @@ def run(
         index = 0  # samples from the first one to last_seq (unwrapped)
         first_t, period_checked = state.t, False
         ending, message = "completed", None
-        while watchdog.cycles < cycles_wanted:
-            if state is None:
-                if watchdog.check_silence(clock()):
+        while True:
+            if state is None or not watchdog.arrived(state.seq, state.received):
+                if state is not None:  # stale: not answered, and not the robot talking
+                    gap = seq_diff(state.seq, last_seq)
+                    safety.stale(
+                        (index + gap) * period,
+                        f"sample {state.seq} arrived after sample {last_seq}; ignored",
+                    )
+                now = clock()
+                if watchdog.check_silence(now):
                     safety.watchdog(index * period, watchdog.message)
                     _send_safe(robot, safety, last_seq + 1, last_qd)
                     ending, message = "watchdog", watchdog.message
+                    break
+                if now - start > allowed:
+                    message = _overrun(now - start, index * period, duration, allowed)
+                    safety.watchdog(index * period, message)
+                    _send_safe(robot, safety, last_seq + 1, last_qd)
+                    ending = "watchdog"
                     break
                 state = robot.read_state(read_timeout)
                 continue
@@ -135,10 +155,6 @@ def run(
                 break
             gap = seq_diff(state.seq, last_seq)  # 0 at the first sample
             t = (index + gap) * period
-            if not watchdog.arrived(state.seq, state.received):
-                safety.stale(t, f"sample {state.seq} arrived after sample {last_seq}; ignored")
-                state = robot.read_state(read_timeout)
-                continue
             last_seq, index = state.seq, index + gap
             if index >= PERIOD_CHECK_SAMPLES and not period_checked:
                 period_checked = True
@@ -160,18 +176,46 @@ def run(
             if fault is not None:
                 ending, message = "fault", _fault_message(fault)
                 break
-            watchdog.answered(state.received, clock())
+            now = clock()
+            watchdog.answered(state.received, now)
             if watchdog.tripped:
                 safety.watchdog(t, watchdog.message)
                 _send_safe(robot, safety, state.seq, state.qd)
                 ending, message = "watchdog", watchdog.message
                 break
-            if watchdog.cycles >= cycles_wanted:
+            if index >= last_index:  # loop time reached the duration
+                break
+            if now - start > allowed:
+                message = _overrun(now - start, t, duration, allowed)
+                safety.watchdog(t, message)
+                _send_safe(robot, safety, state.seq, state.qd)
+                ending = "watchdog"
                 break
             state = robot.read_state(read_timeout)
         return _report(ending, message, watchdog.cycles, clock() - start, safety, watchdog)
     finally:
         robot.stop()
+
+
+#: A run may take its duration plus this much clock time (at least OVERRUN_GRACE [s], or
+#: OVERRUN_FRACTION of the duration): a robot whose states come slower than its period (or whose
+#: loop time stalls) is stopped by the loop's watchdog instead of stretching the run.
+OVERRUN_GRACE = 1.0
+OVERRUN_FRACTION = 0.25
+
+
+def overrun_grace(duration: float) -> float:
+    """The clock time [s] a run of ``duration`` [s] may take beyond it."""
+    return max(OVERRUN_GRACE, OVERRUN_FRACTION * duration)
+
+
+def _overrun(elapsed: float, loop_time: float, duration: float, allowed: float) -> str:
+    return (
+        f"the run has taken {elapsed:.3g} s of clock time for {loop_time:.3g} s of its "
+        f"{duration:.3g} s of loop time (allowed: {allowed:.3g} s): the robot's states come "
+        "slower than its period, or with sequence numbers that do not advance; safe command "
+        "sent, run stopped"
+    )
 
 
 #: After this many samples the robot's period (from its states' times) is compared with the
