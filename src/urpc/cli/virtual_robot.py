@@ -63,7 +63,8 @@ def register(commands) -> None:
         "robot's rate, streaming its state to a controller over UDP on 127.0.0.1 and applying the "
         "torques it sends back (packet format: docs/robot.md). Until the first torque the arm is "
         "held (brakes on); afterwards its own watchdog brakes it when no torque arrives for "
-        "--watchdog-ms. Prints a ready line, then what it did: why it stopped, packets, late "
+        "--watchdog-ms. A torque with a non-finite entry is dropped and counted as malformed; one "
+        "beyond the URDF's effort limits is clipped to them. Prints a ready line, then what it did: why it stopped, packets, late "
         "cycles.",
         epilog="Stops when braked (watchdog or the controller's STOP), after --max-duration, or "
         "when no controller registers within --wait. Exit code 0; 2 on bad input.",

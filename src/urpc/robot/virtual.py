@@ -5,7 +5,11 @@
 that applies (none, one sample of delay), adds a disturbance, integrates the plant over the
 period and keeps its own watchdog: once armed by a first torque, the arm is **braked** (held still,
 ``qd = 0``, torque ignored) when no torque has arrived for ``watchdog_timeout`` (20 ms), as real
-arms do. Two drivers run it:
+arms do. A torque with a non-finite entry is dropped and counted (:attr:`VirtualArm.rejected`;
+the last torque holds, and the watchdog brakes the arm if no valid one follows); a torque beyond
+the plant's effort limits (the URDF's, where finite) is clipped to them and counted
+(:attr:`VirtualArm.clipped`), as a real arm's drives saturate; a plant that diverges anyway brakes
+the arm with the reason. Two drivers run it:
 
 * :func:`urpc.robot.virtual_server.serve`, the process of ``urpc virtual-robot``: wall-clock
   time at the robot's rate, UDP on 127.0.0.1 (:mod:`urpc.robot.packet`), lost packets;
@@ -31,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, SimulationError
 from ..names import VELOCITY_MODES
 from ..sim.plants import make_plant
 from ..sim.sampled import ball_samples
@@ -103,6 +107,9 @@ class VirtualArm:
         braked: The watchdog (or a STOP) braked the arm.
         armed: A torque has arrived once (brakes released, watchdog running).
         late: Periods that started without their torque (the last one was held).
+        rejected: Torques dropped for a non-finite entry.
+        clipped: Torques clipped to the effort limits.
+        effort_limit: Per joint, the largest torque applied [N m or N] (``inf``: none).
         stop_reason: Why the arm was braked.
     """
 
@@ -129,6 +136,10 @@ class VirtualArm:
         self.braked = False
         self.armed = False
         self.late = 0
+        self.rejected = 0
+        self.clipped = 0
+        effort = np.asarray(plant_robot.effort_limit, dtype=float)
+        self.effort_limit = np.where(np.isfinite(effort) & (effort > 0), effort, np.inf)
         self.stop_reason: str | None = None
         self.stopped_at: float | None = None
         self.last_torque_time: float | None = None
@@ -170,16 +181,27 @@ class VirtualArm:
         self._q_measured_previous = q
         return q, qd
 
-    def receive(self, now: float, seq: int, tau: np.ndarray) -> None:
-        """A torque answering the sample numbered ``seq`` on the wire arrived at ``now`` [s]."""
+    def receive(self, now: float, seq: int, tau: np.ndarray) -> bool:
+        """A torque answering the sample numbered ``seq`` on the wire arrived at ``now`` [s].
+        False when it is dropped: the arm is braked, or an entry is not finite (counted in
+        :attr:`rejected`; it neither arms the arm nor feeds its watchdog). A torque beyond
+        :attr:`effort_limit` is clipped to it (counted in :attr:`clipped`)."""
         if self.braked:
-            return
+            return False
+        tau = np.array(tau, dtype=float)
+        if tau.shape != (self.dof,) or not np.isfinite(tau).all():
+            self.rejected += 1
+            return False
+        limited = np.clip(tau, -self.effort_limit, self.effort_limit)
+        if not np.array_equal(limited, tau):
+            self.clipped += 1
         self.armed = True
         self.last_torque_time = now
         self.torques += 1
-        self._torques[self.sample_of(seq)] = np.array(tau, dtype=float)
+        self._torques[self.sample_of(seq)] = limited
         if len(self._torques) > 8:
             del self._torques[min(self._torques)]
+        return True
 
     def has_torque_for_current(self) -> bool:
         """Whether the torque that applies to the current period has arrived."""
@@ -220,7 +242,10 @@ class VirtualArm:
             tau = self.applied
             if self.options.disturbance > 0:
                 tau = tau + ball_samples(1, self.dof, self.options.disturbance, self._rng)[0]
-            self.plant.step(tau, self.period)
+            try:
+                self.plant.step(tau, self.period)
+            except SimulationError as exc:  # the arm stops where it was, as braked
+                self.brake(None, f"stopped: {exc}")
         self.seq += 1
 
     def flags(self) -> int:

@@ -49,6 +49,11 @@ class ServeReport:
     arm_joints: int
     #: The joint count of a controller for another arm that said HELLO, if one did.
     foreign_joints: int | None = None
+    #: Torque packets dropped for a non-finite entry (also counted as malformed).
+    non_finite_torques: int = 0
+    #: Torques clipped to the arm's effort limits.
+    clipped_torques: int = 0
+    effort_limit: tuple[float, ...] = ()
 
     def lines(self) -> list[str]:
         lines = [self.reason]
@@ -63,7 +68,18 @@ class ServeReport:
             f"  packets: {self.states_sent} states sent ({self.lost_states} dropped on purpose), "
             f"{self.torques_received} torques received ({self.lost_torques} dropped on purpose), "
             f"{self.bad_packets} malformed"
+            + (
+                f" ({self.non_finite_torques} with a non-finite torque, dropped)"
+                if self.non_finite_torques
+                else ""
+            )
         )
+        if self.clipped_torques:
+            limits = ", ".join(f"{x:g}" for x in self.effort_limit)
+            lines.append(
+                f"  torque: {self.clipped_torques} torques beyond the effort limits clipped to "
+                f"them (+-[{limits}] N m)"
+            )
         lines.append(
             f"  samples: {self.samples}; late cycles: {self.late_periods} periods without their "
             f"torque in time, {self.late_ticks} ticks started more than half a period late"
@@ -146,8 +162,10 @@ def serve(
             if options.loss and rng.random() < options.loss:
                 counts["lost_torques"] += 1
                 continue
-            counts["received"] += 1
-            arm.receive(clock(), packet.seq, packet.tau)
+            if arm.receive(clock(), packet.seq, packet.tau) or arm.braked:
+                counts["received"] += 1
+            else:  # a non-finite torque: malformed, dropped (arm.rejected)
+                counts["bad"] += 1
 
     try:
         start = clock()
@@ -212,6 +230,9 @@ def _serve_report(reason: str, arm: VirtualArm, counts: dict) -> ServeReport:
         latency,
         arm.dof,
         counts["foreign"],
+        arm.rejected,
+        arm.clipped,
+        tuple(float(x) for x in arm.effort_limit),
     )
 
 
