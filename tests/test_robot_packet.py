@@ -69,3 +69,23 @@ def test_an_address_with_parts_a_robot_does_not_take_says_which(bad, words):
     with pytest.raises(InputError, match="robot-address") as caught:
         parse_address(bad)
     assert words in str(caught.value)
+
+
+@pytest.mark.parametrize(
+    "mutate, kind",
+    [
+        (lambda d: d[:-8], "size"),
+        (lambda d: b"\x7e\x03\x8e\xbf" + d[4:], "magic"),
+        (lambda d: d[:4] + bytes([9]) + d[5:], "version"),
+        (lambda d: packet.encode_state(1, 0.0, np.zeros(3), np.zeros(3)), "joints"),
+    ],
+)
+def test_a_refused_state_says_what_kind_of_wrong_it_is(mutate, kind):
+    # A state for 3 joints was refused for its size only, so urpc run could not tell it from
+    # garbage or another protocol version (and advised --lock for all three).
+    data = packet.encode_state(1, 0.0, np.zeros(2), np.zeros(2))
+    with pytest.raises(packet.PacketError) as caught:
+        packet.decode_state(mutate(data), 2)
+    assert caught.value.kind == kind
+    assert caught.value.joints == (3 if kind == "joints" else None)
+    assert caught.value.version == (9 if kind == "version" else None)

@@ -66,3 +66,20 @@ def test_defaults_come_from_the_urdf_efforts():
     assert np.array_equal(safety.torque_limit, robot.effort_limit)
     with pytest.raises(urpc.InputError, match="safe mode"):
         SafetyLayer.for_robot(robot, 1e-3, safe_mode="hover")
+
+
+def test_a_finite_state_far_out_is_out_of_range_not_non_finite():
+    # q @ q overflowed for 1e300 (with a numpy warning): it was reported as a non-finite state.
+    import warnings
+
+    safety = layer()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fault = safety.check_state(0.1, np.array([1e300, 0.0]), np.zeros(2))
+        assert fault.kind == "position_limit" and "joint 1 at 1e+300" in fault.detail
+        fault = safety.check_state(0.1, np.zeros(2), np.array([0.0, -1e200]))
+        assert fault.kind == "velocity_limit"
+        out, fault = safety.limit(0.1, np.array([1e300, -1e300]))
+    assert fault is None and out.tolist() == [10.0, -5.0]  # clipped, not a non-finite torque
+    fault = safety.check_state(0.2, np.array([np.nan, 1e300]), np.zeros(2))
+    assert fault.kind == "non_finite_state" and fault.joints == (0,)

@@ -190,3 +190,68 @@ def test_a_silence_limit_shorter_than_two_periods_is_one_error_line():
     )  # fmt: skip
     assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
     assert done.stderr.startswith("error: field 'silence-ms': 1.5 ms is less than two")
+
+
+def _fake_robot(states):
+    """A UDP 'robot' on 127.0.0.1 answering every datagram with ``states()``; returns its port
+    and a function that stops it."""
+    import socket
+    import threading
+
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sock.bind(("127.0.0.1", 0))
+    sock.settimeout(0.2)
+    done = threading.Event()
+
+    def answer():
+        while not done.is_set():
+            try:
+                _, peer = sock.recvfrom(65536)
+            except OSError:
+                continue
+            sock.sendto(states(), peer)
+
+    thread = threading.Thread(target=answer, daemon=True)
+    thread.start()
+
+    def stop():
+        done.set()
+        thread.join(5)
+        sock.close()
+
+    return sock.getsockname()[1], stop
+
+
+@pytest.mark.parametrize(
+    "kind, words",
+    [
+        ("version", "speaks packet version 9; this urpc speaks version 1"),
+        ("garbage", "answers with datagrams that are not urpc state packets"),
+    ],
+)
+def test_a_robot_of_another_protocol_is_told_apart_from_another_arm(kind, words):
+    """The message advised 'lock or unlock joints (--lock)', an option urpc run does not have,
+    for a version mismatch and for garbage alike."""
+    import numpy as np
+
+    from urpc.robot.packet import encode_state
+
+    def states():
+        data = bytearray(encode_state(0, 0.0, np.zeros(2), np.zeros(2)))
+        if kind == "version":
+            data[4] = 9
+        else:
+            data[:4] = b"\x7e\x03\x8e\xbf"
+        return bytes(data)
+
+    port, stop = _fake_robot(states)
+    try:
+        done = subprocess.run(
+            [*URPC, "run", "rr_planar/s3_ic1", "--robot-address", f"udp://127.0.0.1:{port}"],
+            capture_output=True, text=True, timeout=120,
+        )  # fmt: skip
+    finally:
+        stop()
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert done.stderr.startswith("error: field 'robot-address': ") and words in done.stderr
+    assert "--lock" not in done.stderr and "Traceback" not in done.stderr

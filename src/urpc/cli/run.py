@@ -347,12 +347,9 @@ def run_robot(args) -> int:
     first = robot.read_state(5.0)
     if first is None:
         robot.stop()
-        if robot.last_error:  # it answers, with datagrams this loop cannot use
+        if robot.last_refusal is not None:  # it answers, with datagrams this loop cannot use
             raise InputError(
-                f"the robot at {args.robot_address} answers with states this loop refuses "
-                f"({robot.last_error}): the scenario's robot has {setup.robot.dof} joints "
-                f"({', '.join(setup.robot.joint_names)}); lock or unlock joints (--lock) so that "
-                "the loop and the robot drive the same arm",
+                _refusal(robot.last_refusal, args.robot_address, setup.robot, scenario),
                 field="robot-address",
             )
         raise InputError(
@@ -438,6 +435,33 @@ def run_robot(args) -> int:
         print(f"error: run stopped: {report.message}", file=sys.stderr)
         return EXIT_STOPPED
     return EXIT_OK
+
+
+def _refusal(refusal, address: str, robot, scenario) -> str:
+    """Why the robot's first answer is refused, and what to change: the joints (the scenario's
+    locked_joints, or the robot's own lock), the protocol version, or the address."""
+    arm = f"{robot.dof} joint{'s' if robot.dof != 1 else ''} ({', '.join(robot.joint_names)})"
+    where = scenario.source or f"the scenario {scenario.name}"
+    if refusal.kind == "joints":
+        return (
+            f"the robot at {address} sends states for {refusal.joints} joints; the scenario's "
+            f"robot has {arm}: lock joints in {where} (locked_joints, docs/scenarios.md) or on "
+            "the robot (urpc virtual-robot ... --lock) so that the loop and the robot drive the "
+            "same arm"
+        )
+    if refusal.kind == "version":
+        from ..robot.packet import VERSION
+
+        return (
+            f"the robot at {address} speaks packet version {refusal.version}; this urpc speaks "
+            f"version {VERSION} (docs/robot.md, Packets): run the robot and urpc run from the "
+            "same urpc release, or update the robot's adapter"
+        )
+    return (
+        f"the robot at {address} answers with datagrams that are not urpc state packets for "
+        f"{arm} ({refusal}): check that --robot-address is the port of a urpc robot (urpc "
+        "virtual-robot, or an adapter sending the state packets of docs/robot.md)"
+    )
 
 
 def _arm(robot) -> str:

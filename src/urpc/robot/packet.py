@@ -28,7 +28,8 @@ Torque, loop -> robot, ``16 + 8 n`` bytes::
     12      4     -         reserved (0)
     16      8 n   float64   tau, joint torques [N m or N]
 
-A datagram of the wrong size, magic, version or joint count is refused with :class:`PacketError`.
+A datagram of the wrong magic, version, joint count or size is refused with :class:`PacketError`
+(its ``kind`` says which).
 
 **Sequence numbers wrap.** ``seq`` is 32 bits: at 1 kHz it wraps after about 49.7 days
 (``2**32 - 1`` is followed by ``0``). Every decision on sequence numbers (newer, older, stale,
@@ -66,7 +67,17 @@ MAX_JOINTS = 255
 
 
 class PacketError(UrpcError, ValueError):
-    """A datagram that is not a urpc packet of the expected kind and size."""
+    """A datagram that is not a urpc packet of the expected kind and size.
+
+    Attributes:
+        kind: What is wrong: ``magic`` (not a urpc packet of this kind), ``version`` (another
+            protocol version, in :attr:`version`), ``joints`` (a packet for another number of
+            joints, in :attr:`joints`), ``size`` (a header that fits, a body that does not).
+    """
+
+    def __init__(self, message: str, kind: str = "size", *, version=None, joints=None):
+        super().__init__(message)
+        self.kind, self.version, self.joints = kind, version, joints
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,7 +128,7 @@ def torque_size(n: int) -> int:
 
 def _joints(n: int) -> int:
     if not 1 <= n <= MAX_JOINTS:
-        raise PacketError(f"{n} joints; a packet carries 1 to {MAX_JOINTS}")
+        raise PacketError(f"{n} joints; a packet carries 1 to {MAX_JOINTS}", "joints", joints=n)
     return n
 
 
@@ -130,12 +141,8 @@ def encode_state(seq: int, t: float, q: np.ndarray, qd: np.ndarray, flags: int =
 
 def decode_state(data: bytes, n: int) -> StatePacket:
     """The state in ``data``, which must be a version-1 state packet of ``n`` joints."""
-    if len(data) != state_size(n):
-        raise PacketError(
-            f"state packet of {len(data)} bytes; expected {state_size(n)} for {n} joints"
-        )
-    magic, version, joints, flags, seq, t, _ = _STATE_HEADER.unpack_from(data)
-    _check(magic, STATE_MAGIC, version, joints, n)
+    _check(data, STATE_MAGIC, n, state_size(n), "state")
+    _, _, _, flags, seq, t, _ = _STATE_HEADER.unpack_from(data)
     body = np.frombuffer(data, dtype="<f8", offset=_STATE_HEADER.size).astype(float)
     return StatePacket(seq, t, body[:n], body[n:], flags)
 
@@ -160,20 +167,32 @@ def hello_joints(data: bytes) -> int | None:
 
 def decode_torque(data: bytes, n: int) -> TorquePacket:
     """The torque in ``data``, which must be a version-1 torque packet of ``n`` joints."""
-    if len(data) != torque_size(n):
-        raise PacketError(
-            f"torque packet of {len(data)} bytes; expected {torque_size(n)} for {n} joints"
-        )
-    magic, version, joints, flags, seq, _ = _TORQUE_HEADER.unpack_from(data)
-    _check(magic, TORQUE_MAGIC, version, joints, n)
+    _check(data, TORQUE_MAGIC, n, torque_size(n), "torque")
+    _, _, _, flags, seq, _ = _TORQUE_HEADER.unpack_from(data)
     tau = np.frombuffer(data, dtype="<f8", offset=_TORQUE_HEADER.size).astype(float)
     return TorquePacket(seq, tau, flags)
 
 
-def _check(magic: bytes, expected: bytes, version: int, joints: int, n: int) -> None:
+def _check(data: bytes, expected: bytes, n: int, size: int, what: str) -> None:
+    """Refuse ``data`` unless it is a version-1 ``what`` packet of ``n`` joints and ``size``
+    bytes, saying first what is most telling: the magic, the version, the joint count, the size."""
+    magic = bytes(data[:4])
     if magic != expected:
-        raise PacketError(f"magic {magic!r}; expected {expected!r}")
+        raise PacketError(f"magic {magic!r}; expected {expected!r}", "magic")
+    if len(data) < 6:
+        raise PacketError(f"{what} packet of {len(data)} bytes; expected {size}", "size")
+    version, joints = data[4], data[5]
     if version != VERSION:
-        raise PacketError(f"packet version {version}; this urpc speaks version {VERSION}")
+        raise PacketError(
+            f"packet version {version}; this urpc speaks version {VERSION}",
+            "version",
+            version=version,
+        )
     if joints != n:
-        raise PacketError(f"packet for {joints} joints; this robot has {n}")
+        raise PacketError(
+            f"packet for {joints} joints; this robot has {n}", "joints", joints=joints
+        )
+    if len(data) != size:
+        raise PacketError(
+            f"{what} packet of {len(data)} bytes; expected {size} for {n} joints", "size"
+        )

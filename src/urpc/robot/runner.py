@@ -247,8 +247,8 @@ def _send_safe(robot: RobotInterface, safety: SafetyLayer, seq: int, qd: np.ndar
 def _fault_message(fault) -> str:
     what = {
         "non_finite_state": "non-finite state",
-        "position_limit": "position limit",
-        "velocity_limit": "velocity limit",
+        "position_limit": "position out of range (beyond the joint limits less the margin)",
+        "velocity_limit": "velocity out of range (beyond the velocity limit less the margin)",
         "non_finite_torque": "the controller returned a non-finite torque",
     }[fault.kind]
     return f"{what} at t = {fault.t:.4f} s: {fault.detail}; safe command sent, run stopped"

@@ -18,7 +18,6 @@ command is selectable: ``zero`` (no torque: the arm's own brakes or gravity take
 
 from __future__ import annotations
 
-import math
 from collections import Counter
 from dataclasses import dataclass
 from typing import Any
@@ -218,8 +217,11 @@ class SafetyLayer:
             InputError: ``q`` or ``qd`` is not ``dof`` numbers (a robot of another arm).
         """
         q, qd = self._vector("q", q), self._vector("qd", qd)
-        if not (math.isfinite(q @ q) and math.isfinite(qd @ qd)):
-            bad = tuple(int(j) for j in np.flatnonzero(~(np.isfinite(q) & np.isfinite(qd))))
+        # entry by entry: a dot product overflows for a finite 1e300, which is out of range,
+        # not non-finite
+        finite = np.isfinite(q) & np.isfinite(qd)
+        if not finite.all():
+            bad = tuple(int(j) for j in np.flatnonzero(~finite))
             return self._record(t, "non_finite_state", bad, f"q = {q.tolist()}, qd = {qd.tolist()}")
         outside = np.flatnonzero((q < self.lower) | (q > self.upper))
         if outside.size:
@@ -255,7 +257,7 @@ class SafetyLayer:
             InputError: ``tau`` is not ``dof`` numbers.
         """
         tau = self._vector("tau", tau)
-        if not math.isfinite(tau @ tau):
+        if not np.isfinite(tau).all():  # not tau @ tau: a finite 1e300 is clipped, not a fault
             fault = self._record(t, "non_finite_torque", (), f"tau = {tau.tolist()}")
             return self.safe_command(np.zeros(self.dof)), fault
         limit = self.torque_limit

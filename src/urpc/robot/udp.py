@@ -95,6 +95,8 @@ class UdpRobot:
         self._size = state_size(dof)
         self.received = self.sent = self.bad_packets = self.dropped = 0
         self.last_error: str | None = None
+        #: Why the last datagram refused was refused (:class:`PacketError`, its ``kind``).
+        self.last_refusal: PacketError | None = None
         self._registered = False
         self._stopped = False
         self._hello()
@@ -132,6 +134,7 @@ class UdpRobot:
             except PacketError as exc:
                 self.bad_packets += 1
                 self.last_error = str(exc)
+                self.last_refusal = exc
                 continue
             self.received += 1
             self._registered = True
