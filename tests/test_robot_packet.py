@@ -59,6 +59,7 @@ def test_addresses_are_loopback_only():
     "bad, words",
     [
         ("udp://", "gives no host and port"),
+        ("udp://:47000", "'udp://:47000' gives no host before the port; expected udp://127"),
         ("udp://127.0.0.1:99999", "PORT 1-65535"),
         ("udp://localhost:5000/path", "has a path"),
         ("udp://127.0.0.1:5000?x=1", "has a query"),

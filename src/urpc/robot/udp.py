@@ -47,6 +47,8 @@ def parse_address(text: str, field: str = "robot-address") -> tuple[str, int]:
             f"{text!r} has {' and '.join(extra)}, which a robot address does not take; {expected}",
             field=field,
         )
+    if not parts.hostname:
+        raise InputError(f"{text!r} gives no host before the port; {expected}", field=field)
     if parts.hostname not in ("127.0.0.1", "localhost"):
         raise InputError(f"host {parts.hostname!r} is not the loopback; {expected}", field=field)
     try:
