@@ -25,6 +25,13 @@ Z = np.zeros(2)
 T6 = np.linspace(0.0, 1.0, 6)
 Q6 = np.zeros((6, 2))
 
+
+def _step_twice(controller, t0, t1):
+    loop = ControlLoop(controller, urpc.PaperTrajectory())
+    loop.step(t0, Z, Z)
+    loop.step(t1, Z, Z)
+
+
 #: name -> (call(robot, box, controller), the field the error names, words of its message)
 CASES = {
     # the safety layer: a NaN or negative period, a pushing brake, another arm's vectors
@@ -84,6 +91,23 @@ CASES = {
         "give lower <= upper",
     ),
     "safety_no_joints": (lambda r, b, c: SafetyLayer([], 1e-3), "torque_limit", "one per joint"),
+    # a robot's name instead of the Robot (AttributeError), a number for the names (TypeError)
+    "safety_for_a_robot_name": (
+        lambda r, b, c: SafetyLayer.for_robot("rr_planar", 1e-3),
+        "robot",
+        "expected a Robot (urpc.load_robot(...), controller.robot), got str (load it first: "
+        "urpc.load_robot('rr_planar'))",
+    ),
+    "safety_number_for_joint_names": (
+        lambda r, b, c: SafetyLayer([10, 10], 1e-3, joint_names=5),
+        "joint_names",
+        "5: expected a list of 2 joint names (strings), or None",
+    ),
+    "safety_text_for_joint_names": (
+        lambda r, b, c: SafetyLayer([10, 10], 1e-3, joint_names="ab"),
+        "joint_names",
+        "expected a list of 2 joint names",
+    ),
     # the watchdog: a NaN silence never trips, a text period
     "watchdog_nan_silence": (lambda r, b, c: Watchdog(1e-3, silence=float("nan")), "silence", ""),
     "watchdog_zero_silence": (lambda r, b, c: Watchdog(1e-3, silence=0), "silence", ""),
@@ -124,6 +148,12 @@ CASES = {
         lambda r, b, c: ControlLoop(c, urpc.PaperTrajectory()).step("0", Z, Z),
         "t",
         "expected a finite time [s]",
+    ),
+    # time going back: the controller's state had advanced and the log went out of order
+    "loop_time_going_back": (
+        lambda r, b, c: _step_twice(c, 0.002, 0.001),
+        "t",
+        "t = 0.001 s is before the previous step's 0.002 s: loop time must not go back",
     ),
     "loop_result_before_a_step": (
         lambda r, b, c: ControlLoop(c, urpc.PaperTrajectory()).result(),
@@ -330,6 +360,11 @@ def test_the_valid_calls_next_to_them_still_work(rr):
     assert Watchdog(1e-3, silence=0.02).silence == 0.02
     loop = ControlLoop(controller, urpc.PaperTrajectory(), period=1e-3, epsilon=1e-2)
     assert loop.step(0, Z, Z).shape == (2,)  # an integer time is a time
+    assert loop.step(0.0, Z, Z).shape == (2,)  # the same time again: not going back
+    loop.reset()
+    assert loop.step(0.0, Z, Z).shape == (2,)  # a reset starts time again
+    named = SafetyLayer([10, 10], 1e-3, joint_names=("shoulder", "elbow"))  # a tuple of names
+    assert named.joint_names == ("shoulder", "elbow")
     trajectory = urpc.from_samples(T6, np.linspace(0, 1, 6), np.zeros(6))  # one joint, vectors
     assert trajectory.dof == 1
     streamed = urpc.StreamedReference(Z, velocity_limit=1.0, acceleration_limit=[2.0, 2.0])

@@ -152,6 +152,7 @@ class ControlLoop:
         self._values = [math.nan] * len(self._names)
         self._filtered: np.ndarray | None = None  # the velocity filter's output and its time
         self._filtered_t = math.nan
+        self._last_t = -math.inf  # loop time of the latest step: it must not go back
 
     def filter_velocity(self, t: float, qd: np.ndarray) -> np.ndarray:
         """The velocity the controller sees at loop time ``t`` [s]: ``qd`` itself without a
@@ -180,10 +181,23 @@ class ControlLoop:
         """The torque [N m] for the sample ``(q, qd)`` at loop time ``t`` [s]; advances the
         controller's state by one period and logs the sample. ``qd`` is the measured velocity;
         with ``velocity_filter_hz`` the controller gets its filtered value
-        (:meth:`filter_velocity`), logged as ``qd_filtered`` next to the measured ``qd``."""
+        (:meth:`filter_velocity`), logged as ``qd_filtered`` next to the measured ``qd``.
+
+        Raises:
+            InputError: ``t`` is not a finite number, or earlier than the previous step's
+                (loop time never goes back; :meth:`reset` starts again).
+        """
         tic = self._clock()
         if not (type(t) is float and math.isfinite(t)):  # noqa: E721 (exact type: the fast path)
             t = number_in("t", t, "a finite time [s]", lambda x: True)
+        if t < self._last_t:
+            raise InputError(
+                f"t = {t:.9g} s is before the previous step's {self._last_t:.9g} s: loop time "
+                "must not go back (the controller's state has advanced one period per step and "
+                "the log is in time order); call reset() to start a new run",
+                field="t",
+            )
+        self._last_t = t
         controller, state = self.controller, self.state
         measured = qd
         if self._omega is not None:

@@ -45,6 +45,14 @@ KINDS = (
 FAULTS = ("non_finite_state", "position_limit", "velocity_limit", "non_finite_torque", "watchdog")
 
 
+def _iterable(value) -> tuple:
+    """``value``'s items, or ``(value,)`` when it has none (a number): for a type check."""
+    try:
+        return tuple(value)
+    except TypeError:
+        return (value,)
+
+
 @dataclass(frozen=True)
 class Intervention:
     """One intervention: at time ``t`` [s] (loop time), of ``kind`` (:data:`KINDS`), on
@@ -103,6 +111,15 @@ class SafetyLayer:
                 "joint",
                 field="torque_limit",
             )
+        if joint_names is not None:
+            if isinstance(joint_names, str) or not all(
+                isinstance(name, str) for name in _iterable(joint_names)
+            ):
+                raise InputError(
+                    f"{joint_names!r}: expected a list of {n} joint names (strings), or None",
+                    field="joint_names",
+                )
+            joint_names = list(joint_names)
         self.period = positive_number("period", period, "a finite number > 0 [s]")
         self.rate_step = None
         if torque_rate_limit is not None:
@@ -184,8 +201,18 @@ class SafetyLayer:
         (unless ``torque_limit`` is given), its position and velocity limits.
 
         Raises:
-            InputError: a joint without a usable effort limit and no ``torque_limit``.
+            InputError: ``robot`` is not a Robot; a joint without a usable effort limit and no
+                ``torque_limit``.
         """
+        from ..model.robot import Robot
+
+        if not isinstance(robot, Robot):
+            hint = f" (load it first: urpc.load_robot({robot!r}))" if isinstance(robot, str) else ""
+            raise InputError(
+                f"expected a Robot (urpc.load_robot(...), controller.robot), got "
+                f"{type(robot).__name__}{hint}",
+                field="robot",
+            )
         if torque_limit is None:
             effort = robot.effort_limit
             missing = [
