@@ -322,3 +322,39 @@ def test_run_compares_only_the_law_the_scenario_states(tmp_path, capsys):
         capsys, "run", scenario, "--robot-address", "udp://127.0.0.1:9", "--controller", str(path),
     )  # fmt: skip
     assert code == 2 and len(lines) == 1 and "no state from the robot" in lines[0], err
+
+
+@pytest.mark.parametrize(
+    "version, shown", [(True, "true"), (1.0, "1.0"), ("1", "'1'")], ids=["true", "1.0", "text"]
+)
+def test_the_version_is_the_integer_1(version, shown, tmp_path):
+    # true and 1.0 compare equal to 1 in Python: both loaded as version 1.
+    path = _edited(tmp_path, lambda d: d.__setitem__("version", version))
+    with pytest.raises(urpc.InputError) as caught:
+        urpc.load_controller(path)
+    message = str(caught.value)
+    assert message.startswith(f"{path}: field 'version': version {shown}; "), message
+    assert "this urpc reads version 1 (the integer 1)" in message
+
+
+@pytest.mark.parametrize(
+    "old, new, field",
+    [
+        ('"version": 1', '"version": 2, "version": 1', "version"),
+        ('"epsilon": ', '"epsilon": 5.0, "epsilon": ', "law.epsilon"),
+        ('"mass": ', '"mass": [1, 2], "mass": ', "box.document.links.link"),
+    ],
+    ids=["top", "law", "embedded-box"],
+)
+def test_a_key_given_twice_is_refused_naming_it(old, new, field, tmp_path):
+    """JSON keeps the last of two equal keys without a word, so an edit that left the old value
+    above the new one loaded either, depending on their order."""
+    path = _saved(tmp_path)
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new, 1))
+    with pytest.raises(urpc.InputError) as caught:
+        urpc.load_controller(path)
+    message = str(caught.value)
+    assert message.startswith(f"{path}: field '{field}"), message
+    assert "appears more than once in its object" in message and "\n" not in message

@@ -206,14 +206,22 @@ def load_controller(path: str | Path):
     if not path.is_file():
         raise InputError(no_file(path, "controller file"), path)
     try:
-        payload = json.loads(path.read_text())
+        payload, repeated = _parsed(path.read_text())
     except (OSError, ValueError, RecursionError) as exc:  # RecursionError: nested too deep
         raise InputError(f"not a JSON controller file ({exc})", path) from None
+    if repeated is not None:
+        raise InputError(
+            "appears more than once in its object; JSON would keep the last one without a word, "
+            "so remove the others (or save the controller again)",
+            path,
+            repeated,
+        )
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise InputError(f"not a urpc controller file (format is not '{FORMAT}')", path, "format")
-    if payload.get("version") != VERSION:
+    version = payload.get("version")
+    if type(version) is not int or version != VERSION:  # not True, not 1.0: the integer 1
         raise InputError(
-            f"version {payload.get('version')!r}; this urpc reads version {VERSION}",
+            f"version {_shown(version)}; this urpc reads version {VERSION} (the integer {VERSION})",
             path,
             "version",
         )
@@ -293,6 +301,39 @@ def load_controller(path: str | Path):
             "check",
         )
     return controller
+
+
+def _parsed(text: str) -> tuple[Any, str | None]:
+    """The JSON document in ``text`` and the dotted path (``law.Kr``) of a key that appears more
+    than once in one of its objects (``json.loads`` keeps the last value without a word), or
+    ``None``."""
+    repeated: list[tuple[dict, str]] = []
+
+    def build(pairs):
+        obj = dict(pairs)
+        if len(obj) != len(pairs):
+            seen: set[str] = set()
+            key = next(k for k, _ in pairs if k in seen or seen.add(k))
+            repeated.append((obj, key))
+        return obj
+
+    payload = json.loads(text, object_pairs_hook=build)
+    if not repeated:
+        return payload, None
+    target, key = repeated[0]
+    stack: list[tuple[Any, str]] = [(payload, "")]
+    while stack:  # where that object sits (iterative: a document may nest deeply)
+        value, prefix = stack.pop()
+        if value is target:
+            return payload, _inner(prefix, key) if prefix else key
+        if isinstance(value, dict):
+            items = value.items()
+        elif isinstance(value, list):
+            items = ((str(i), item) for i, item in enumerate(value))
+        else:
+            continue
+        stack.extend((item, _inner(prefix, k) if prefix else k) for k, item in items)
+    return payload, key
 
 
 def _inner(prefix: str, field: str | None) -> str:
