@@ -75,7 +75,7 @@ CASES = {
     ),
     "urdf_a_number": (_set("robot", "urdf", 5), "field 'robot.urdf'", "5 is not a text"),
     "robot_missing": (lambda d: d.pop("robot"), "field 'robot'", "missing"),
-    "bad_law_value": (_set("law", "epsilon", -1.0), "field 'law.epsilon'", "> 0"),
+    "bad_law_value": (_set("law", "epsilon", -1.0), "field 'law.epsilon'", ">= 1e-12"),
     "bad_law_method": (_set("law", "method", "nope"), "field 'law.method'", "valid: "),
     "bad_embedded_box": (
         lambda d: d["box"]["document"]["links"]["link2"].__setitem__("mass", [10, 5]),

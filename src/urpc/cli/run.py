@@ -365,19 +365,25 @@ def run_robot(args) -> int:
         except BaseException:
             robot.stop()
             raise
-    trajectory, approach = setup.trajectory, 0.0
-    start = trajectory.reference(0.0).q
-    distance = float(np.linalg.norm(first.q - start))
-    if distance > scenario.epsilon:
-        velocity = np.where(np.isfinite(safety.velocity_limit), 0.25 * safety.velocity_limit, 1.0)
-        approach = float(segment_durations(np.stack([first.q, start]), velocity, 2.0, 1.0)[0])
-        trajectory = Approach(first.q, trajectory, approach)
-    loop = ControlLoop(
-        controller, trajectory, epsilon=scenario.epsilon, velocity_filter_hz=args.velocity_filter
-    )
-    for _ in range(3):  # first calls load compiled kernels and fill caches: not in the run
-        loop.step(0.0, first.q, first.qd)
-    loop.reset()
+    try:  # the robot answers: anything refused from here on stops it before the error line
+        trajectory, approach = setup.trajectory, 0.0
+        start = trajectory.reference(0.0).q
+        distance = float(np.linalg.norm(first.q - start))
+        if distance > scenario.epsilon:
+            limit = safety.velocity_limit
+            velocity = np.where(np.isfinite(limit), 0.25 * limit, 1.0)
+            approach = float(segment_durations(np.stack([first.q, start]), velocity, 2.0, 1.0)[0])
+            trajectory = Approach(first.q, trajectory, approach)
+        loop = ControlLoop(
+            controller, trajectory, epsilon=scenario.epsilon,
+            velocity_filter_hz=args.velocity_filter,
+        )  # fmt: skip
+        for _ in range(3):  # first calls load compiled kernels and fill caches: not in the run
+            loop.step(0.0, first.q, first.qd)
+        loop.reset()
+    except BaseException:
+        robot.stop()
+        raise
     print(
         f"run: connected to {args.robot_address}; running {scenario.duration + approach:g} s",
         file=sys.stderr,
