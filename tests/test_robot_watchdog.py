@@ -87,17 +87,21 @@ def test_a_stalling_loop_is_stopped_by_its_watchdog_with_the_safe_command(rr_rig
     assert arm.braked  # robot.stop() after the fault
 
 
-def test_a_silent_robot_trips_the_loop(rr_rig):
+def silent_after(samples):
     class Silent(LockstepRobot):
         def read_state(self, timeout):
-            if self.arm.seq >= 50:
+            if self.arm.seq >= samples:
                 self.clock.advance(timeout)
                 return None
             return super().read_state(timeout)
 
+    return Silent
+
+
+def test_a_silent_robot_trips_the_loop(rr_rig):
     robot, plant, controller = rr_rig
     clock = FakeClock()
-    silent = Silent(VirtualArm(plant, 1e-3), clock, 1e-4)
+    silent = silent_after(50)(VirtualArm(plant, 1e-3), clock, 1e-4)
     loop = ControlLoop(controller, urpc.PaperTrajectory())
     report = run(
         silent,
@@ -118,17 +122,6 @@ def test_the_silence_limit_is_not_stretched_by_the_late_budget():
     with pytest.raises(InputError, match="less than 2 periods") as caught:
         Watchdog(1e-3, silence=1.5e-3)
     assert caught.value.field == "silence"
-
-
-def silent_after(samples):
-    class Silent(LockstepRobot):
-        def read_state(self, timeout):
-            if self.arm.seq >= samples:
-                self.clock.advance(timeout)
-                return None
-            return super().read_state(timeout)
-
-    return Silent
 
 
 def test_a_silent_robot_ends_a_run_with_a_huge_late_budget_within_the_silence_limit(rr_rig):
