@@ -242,20 +242,30 @@ MAX_URDF_BYTES = 8 << 20
 
 def yourdfpy_module():
     """``yourdfpy``, imported with Ctrl-C held back: its import pulls in trimesh, whose optional
-    imports catch every exception, a ``KeyboardInterrupt`` too, and go on; a Ctrl-C pressed
-    meanwhile is delivered once the import is done (by the default handler, at once)."""
+    imports catch every exception, a ``KeyboardInterrupt`` too, and go on half-imported. A
+    SIGINT meanwhile is only noted, and handed to the previous handler once the import is done
+    (the default one raises ``KeyboardInterrupt`` then). A Python handler runs in the main
+    thread whichever thread the signal reaches (a mask would not do: BLAS's threads take it)."""
     import signal
     import threading
 
-    if "yourdfpy" in sys.modules or threading.current_thread() is not threading.main_thread():
+    previous = signal.getsignal(signal.SIGINT)
+    if (
+        "yourdfpy" in sys.modules
+        or threading.current_thread() is not threading.main_thread()
+        or not callable(previous)  # ignored, or the C default: nothing to hold back
+    ):
         import yourdfpy
 
         return yourdfpy
-    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    noted: list[int] = []
+    signal.signal(signal.SIGINT, lambda signum, frame: noted.append(signum))
     try:
         import yourdfpy
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        signal.signal(signal.SIGINT, previous)
+    if noted:
+        previous(signal.SIGINT, None)
     return yourdfpy
 
 
