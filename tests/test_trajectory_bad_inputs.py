@@ -487,8 +487,10 @@ def test_headerless_csv_with_zero_joints_is_refused(tmp_path):
         urpc.from_samples([0, 1], [[0, 0], [1, 1]]),
         urpc.WaypointTrajectory([[0, 0], [1, 1]], [0, 1]),
         urpc.StreamedReference([0, 0]),
+        urpc.PaperTrajectory(),
+        urpc.SinusoidTrajectory((0, 0), (0.1, 0.2), 0.5),
     ],
-    ids=["samples", "waypoints", "streamed"],
+    ids=["samples", "waypoints", "streamed", "paper", "sinusoid"],
 )
 def test_a_reference_at_a_time_that_is_not_a_number(t, trajectory):
     with pytest.raises(urpc.InputError, match=r"field 't': the time .* is not a number \[s\]"):

@@ -216,6 +216,8 @@ class PaperTrajectory(Trajectory):
 
     def reference(self, t: float) -> Reference:
         # Scalar fast path (called once per control step): same formulas as evaluate().
+        if not (isinstance(t, float | int) and t == t):  # a text, None, NaN: refused
+            t = as_time(t)
         w = math.pi
         s1, c1 = math.sin(w * t / 2), math.cos(w * t / 2)
         s2, c2 = math.sin(w * t), math.cos(w * t)
@@ -278,6 +280,8 @@ class SinusoidTrajectory(Trajectory):
 
     def reference(self, t: float) -> Reference:
         # Scalar fast path (called once per control step): same formulas as evaluate().
+        if not (isinstance(t, float | int) and t == t):  # a text, None, NaN: refused
+            t = as_time(t)
         angle = self._omega * t + self.phase
         s = np.sin(angle)
         return Reference(
