@@ -65,22 +65,35 @@ def test_arm_watchdog_brakes_after_20_ms_without_torque(rr_rig):
     assert np.array_equal(arm.state.q, q) and np.all(arm.state.qd == 0)
 
 
-def run_lockstep(rr_rig, response_time, **watchdog):
-    robot, plant, controller = rr_rig
+@dataclasses.dataclass
+class Lockstep:
+    """A whole run on the fake clock, and what it ran with."""
+
+    report: object
+    loop: ControlLoop
+    safety: SafetyLayer
+    arm: VirtualArm
+    watchdog: Watchdog
+    clock: FakeClock
+
+
+def run_lockstep(rr_rig, response_time=1e-4, *, robot=LockstepRobot, duration=1.0, **watchdog):
+    """The paper's reference for ``duration`` [s] at 1 kHz on the RR arm, through ``robot`` (a
+    :class:`LockstepRobot` class answering after ``response_time``), on a fake clock."""
+    model, plant, controller = rr_rig
     clock = FakeClock()
     arm = VirtualArm(plant, 1e-3)
-    lockstep = LockstepRobot(arm, clock, response_time)
     loop = ControlLoop(controller, urpc.PaperTrajectory())
-    safety = SafetyLayer.for_robot(robot, 1e-3, safe_mode="zero")
-    report = run(lockstep, loop, safety, Watchdog(1e-3, **watchdog), 1.0, clock=clock)
-    return report, loop, safety, arm
+    safety = SafetyLayer.for_robot(model, 1e-3, safe_mode="zero")
+    dog = Watchdog(1e-3, **watchdog)
+    report = run(robot(arm, clock, response_time), loop, safety, dog, duration, clock=clock)
+    return Lockstep(report, loop, safety, arm, dog, clock)
 
 
 def test_a_stalling_loop_is_stopped_by_its_watchdog_with_the_safe_command(rr_rig):
     # On time for 100 cycles, then every answer takes 0.8 ms (deadline 0.5 ms).
-    report, loop, safety, arm = run_lockstep(
-        rr_rig, lambda seq: 1e-4 if seq < 100 else 8e-4, late_budget=5
-    )
+    done = run_lockstep(rr_rig, lambda seq: 1e-4 if seq < 100 else 8e-4, late_budget=5)
+    report, safety, arm = done.report, done.safety, done.arm
     assert report.ending == "watchdog" and "6 consecutive late cycles" in report.message
     assert report.cycles == 106 and safety.counts["watchdog"] == 1
     assert np.array_equal(safety.last_torque, np.zeros(2))  # the safe command was the last one
@@ -99,18 +112,7 @@ def silent_after(samples):
 
 
 def test_a_silent_robot_trips_the_loop(rr_rig):
-    robot, plant, controller = rr_rig
-    clock = FakeClock()
-    silent = silent_after(50)(VirtualArm(plant, 1e-3), clock, 1e-4)
-    loop = ControlLoop(controller, urpc.PaperTrajectory())
-    report = run(
-        silent,
-        loop,
-        SafetyLayer.for_robot(robot, 1e-3),
-        Watchdog(1e-3, silence=0.01),
-        1.0,
-        clock=clock,
-    )
+    report = run_lockstep(rr_rig, robot=silent_after(50), silence=0.01).report
     assert report.ending == "watchdog" and "no state from the robot" in report.message
     assert report.cycles == 51  # samples 0..50, then silence
 
@@ -125,20 +127,10 @@ def test_the_silence_limit_is_not_stretched_by_the_late_budget():
 
 
 def test_a_silent_robot_ends_a_run_with_a_huge_late_budget_within_the_silence_limit(rr_rig):
-    robot, plant, controller = rr_rig
-    clock = FakeClock()
-    silent = silent_after(100)(VirtualArm(plant, 1e-3), clock, 1e-4)
-    loop = ControlLoop(controller, urpc.PaperTrajectory())
-    report = run(
-        silent,
-        loop,
-        SafetyLayer.for_robot(robot, 1e-3),
-        Watchdog(1e-3, late_budget=100000),
-        1.0,
-        clock=clock,
-    )
+    done = run_lockstep(rr_rig, robot=silent_after(100), late_budget=100000)
+    report = done.report
     assert report.ending == "watchdog" and "no state from the robot for 5" in report.message
-    assert clock() < 0.1 + 0.05 + 0.002  # the last state, the 50 ms limit, one read timeout
+    assert done.clock() < 0.1 + 0.05 + 0.002  # the last state, the 50 ms limit, one read timeout
 
 
 class JumpingSeq(LockstepRobot):
@@ -152,15 +144,10 @@ class JumpingSeq(LockstepRobot):
 
 
 def test_stale_states_are_silence_and_the_message_says_so(rr_rig):
-    robot, plant, controller = rr_rig
-    clock = FakeClock()
-    jumping = JumpingSeq(VirtualArm(plant, 1e-3), clock, 1e-4)
-    loop = ControlLoop(controller, urpc.PaperTrajectory())
-    safety = SafetyLayer.for_robot(robot, 1e-3)
-    dog = Watchdog(1e-3)
-    report = run(jumping, loop, safety, dog, 1.0, clock=clock)
+    done = run_lockstep(rr_rig, robot=JumpingSeq)
+    report, safety, dog = done.report, done.safety, done.watchdog
     assert report.ending == "watchdog", report.message
-    assert report.cycles == 100 and clock() < 0.1 + 0.05 + 0.002
+    assert report.cycles == 100 and done.clock() < 0.1 + 0.05 + 0.002
     assert "no new state from the robot for 5" in report.message
     assert "stale states arrived, their sequence numbers not advancing past 99" in report.message
     assert dog.stale_states == safety.counts["stale_state"] >= 49
@@ -177,15 +164,11 @@ class Slow(LockstepRobot):
 
 
 def test_a_run_ends_by_its_duration_plus_the_grace_on_the_clock(rr_rig):
-    robot, plant, controller = rr_rig
-    clock = FakeClock()
-    arm = VirtualArm(plant, 1e-3)
-    slow = Slow(arm, clock, 1e-4)
-    loop = ControlLoop(controller, urpc.PaperTrajectory())
-    report = run(slow, loop, SafetyLayer.for_robot(robot, 1e-3), Watchdog(1e-3), 1.0, clock=clock)
+    done = run_lockstep(rr_rig, robot=Slow)
+    report = done.report
     assert report.ending == "watchdog" and "of clock time for 0.66" in report.message
     assert "allowed: 2 s" in report.message
-    assert 2.0 < clock() < 2.01  # duration 1 s + the grace of 1 s
+    assert 2.0 < done.clock() < 2.01  # duration 1 s + the grace of 1 s
 
 
 class Overtaken(LockstepRobot):
@@ -201,18 +184,8 @@ class Overtaken(LockstepRobot):
 
 def test_a_run_ends_when_loop_time_reaches_the_duration(rr_rig):
     # It counted answered cycles: with every other sample overtaken it ran twice its duration.
-    robot, plant, controller = rr_rig
-    clock = FakeClock()
-    loop = ControlLoop(controller, urpc.PaperTrajectory())
-    dog = Watchdog(1e-3)
-    report = run(
-        Overtaken(VirtualArm(plant, 1e-3), clock, 1e-4),
-        loop,
-        SafetyLayer.for_robot(robot, 1e-3),
-        dog,
-        0.2,
-        clock=clock,
-    )
+    done = run_lockstep(rr_rig, robot=Overtaken, duration=0.2)
+    report, loop, dog = done.report, done.loop, done.watchdog
     assert report.ok, report.message
     assert loop.series()["t"][-1] == pytest.approx(0.2) and dog.lost_samples == 100
     assert report.cycles == 101
