@@ -357,15 +357,11 @@ def run_robot(args) -> int:
             "(urpc virtual-robot ROBOT --port P)",
             field="robot-address",
         )
-    if args.save_controller is not None:  # every input checked, the robot answers: save
-        try:
+    try:  # the robot answers: anything refused from here on stops it before the error line
+        if args.save_controller is not None:  # every input checked: save
             save_controller(
                 controller, args.save_controller, overwrite=args.force, label=save_label
             )
-        except BaseException:
-            robot.stop()
-            raise
-    try:  # the robot answers: anything refused from here on stops it before the error line
         trajectory, approach = setup.trajectory, 0.0
         start = trajectory.reference(0.0).q
         distance = float(np.linalg.norm(first.q - start))

@@ -214,10 +214,9 @@ def advice(
             f"the contraction a = {figures.get('contraction', math.nan):.3g} grows with T "
             f"phi_P as the perturbation b grows with T (a - b = "
             f"{figures.get('margin', math.nan):.3g}): no period helps. Raise phi_P "
-            f"(now {controller.phi_P:.3g} N m s/rad; a approaches beta = "
-            f"{figures.get('beta', math.nan):.3g} once T phi_P passes the inertia, and "
-            f"Theorem 2's adaptive gains stop at phi_max = {controller.phi_max:.3g} N m s/rad "
-            "at this period), or state `disturbance: unknown` for Theorem 2's adaptive gains"
+            f"({_gain_room(controller)}; a approaches beta = "
+            f"{figures.get('beta', math.nan):.3g} once T phi_P passes the inertia), or state "
+            "`disturbance: unknown` for Theorem 2's adaptive gains"
         )
     if term is None:
         margin = figures.get("margin", math.nan)
@@ -254,10 +253,17 @@ def advice(
     if not controller.adaptive and max_period <= 0:
         text += (
             f"; the gains are constant (Theorem 1), so a shorter period shrinks the contraction "
-            f"too: raise phi_P (now {controller.phi_P:.3g} N m s/rad; Theorem 2's adaptive "
-            f"gains stop at phi_max = {controller.phi_max:.3g} N m s/rad at this period)"
+            f"too: raise phi_P ({_gain_room(controller)})"
         )
     return text
+
+
+def _gain_room(controller: IntervalPassivityController) -> str:
+    """Where Theorem 1's constant gain stands against the ceiling Theorem 2's gains stop at."""
+    return (
+        f"now {controller.phi_P:.3g} N m s/rad; Theorem 2's adaptive gains stop at phi_max = "
+        f"{controller.phi_max:.3g} N m s/rad at this period"
+    )
 
 
 def lightest_joint(floor_of: CellFloor, quantities: dict, cell: int) -> int:
