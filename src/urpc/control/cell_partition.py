@@ -25,19 +25,22 @@ MAX_DEPTH = 5
 @dataclasses.dataclass(frozen=True)
 class CellBatch:
     """Cells enclosed together: their spans ``[start, end]`` [s] (before the widening by the
-    period that follows), their refinement depth, and the curvature group of each (the box of
-    first cells whose second derivatives of ``M`` the cell reuses)."""
+    period that follows), their refinement depth, the curvature group of each (the box of first
+    cells whose second derivatives of ``M`` the cell reuses) and whether it takes them over its
+    own box instead (``own``: the halves of a cell split because an inertia model failed on it,
+    and their halves)."""
 
     start: np.ndarray
     end: np.ndarray
     depth: np.ndarray
     group: np.ndarray
+    own: np.ndarray
 
     def __len__(self) -> int:
         return len(self.start)
 
     def __getitem__(self, index) -> CellBatch:
-        return CellBatch(self.start[index], self.end[index], self.depth[index], self.group[index])
+        return CellBatch(*(getattr(self, name)[index] for name in _FIELDS))
 
     @staticmethod
     def concatenate(parts: list[CellBatch]) -> CellBatch:
@@ -45,7 +48,7 @@ class CellBatch:
         return CellBatch(*(np.concatenate([getattr(p, name) for p in parts]) for name in _FIELDS))
 
 
-_FIELDS = ("start", "end", "depth", "group")
+_FIELDS = ("start", "end", "depth", "group", "own")
 
 
 class Partition:
@@ -63,7 +66,8 @@ class Partition:
         edges = np.linspace(0.0, span, first + 1)
         self.batches = [
             CellBatch(
-                edges[:-1], edges[1:], np.zeros(first, dtype=int), np.arange(first) // group_size
+                edges[:-1], edges[1:], np.zeros(first, dtype=int), np.arange(first) // group_size,
+                np.zeros(first, dtype=bool),
             )
         ]
         self.active = [np.ones(first, dtype=bool)]
@@ -82,9 +86,11 @@ class Partition:
         """Every cell of the partition, in the order of the cell axis (batch by batch)."""
         return CellBatch.concatenate([b[m] for b, m in zip(self.batches, self.active, strict=True)])
 
-    def split(self, cells) -> int:
+    def split(self, cells, own: bool = False) -> int:
         """Split the given cells (indices along the cell axis) in two halves each, except those
-        already split :data:`MAX_DEPTH` times. Returns how many cells were split."""
+        already split :data:`MAX_DEPTH` times; with ``own``, the halves take the second
+        derivatives of ``M`` over their own boxes (so do the halves of a cell that does).
+        Returns how many cells were split."""
         chosen = np.zeros(self.count, dtype=bool)
         chosen[np.asarray(cells, dtype=int)] = True
         offset, parts = 0, []
@@ -103,6 +109,7 @@ class Partition:
             CellBatch(
                 np.concatenate([split.start, middle]), np.concatenate([middle, split.end]),
                 np.concatenate([split.depth + 1] * 2), np.concatenate([split.group] * 2),
+                np.concatenate([split.own | own] * 2),
             )
         )  # fmt: skip
         self.active.append(np.ones(2 * len(split), dtype=bool))

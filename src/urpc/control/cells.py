@@ -127,11 +127,12 @@ class CellFloor:
         cells = self.partition.cells()
         return cells.start, cells.end
 
-    def refine(self, cells) -> int:
+    def refine(self, cells, own_curvatures: bool = False) -> int:
         """Split the given cells (indices along the cell axis of :meth:`quantities`) in two
-        halves each (:meth:`Partition.split`); the halves are enclosed when next asked for.
-        Returns how many cells were split."""
-        split = self.partition.split(cells)
+        halves each (:meth:`Partition.split`; ``own_curvatures``: the halves take the second
+        derivatives of ``M`` over their own boxes); the halves are enclosed when next asked
+        for. Returns how many cells were split."""
+        split = self.partition.split(cells, own_curvatures)
         if split:
             self._cache.clear()
         return split
@@ -477,7 +478,9 @@ class CellFloor:
                 self.regressor, self._parameters, box, first.group
             )
         boxes, curvatures = self._curvature_cache[key]
-        return curvatures_for(self.regressor, self._parameters, boxes, curvatures, q, batch.group)
+        return curvatures_for(
+            self.regressor, self._parameters, boxes, curvatures, q, batch.group, batch.own
+        )
 
     def _mismatch_parts(self, batch: CellBatch, tube: float, extension: float):
         """``Y_SL`` over each cell of the reference at ``e = 0`` (a ball), and its Jacobian along

@@ -103,8 +103,9 @@ class SampledSearch:
     def _split_invalid(self) -> tuple[int, bool] | None:
         """An inertia model that fails on a cell fails every period (no floor anywhere, whatever
         the rest): the cells where one fails over the tube ``epsilon`` are split first, from the
-        inertia models alone, while that shrinks the time they cover by a quarter or more (a
-        model that fails for the tube's sake fails on every half of its cell, and is not split).
+        inertia models alone, their halves taking the second derivatives of ``M`` over their own
+        boxes, while that shrinks the time they cover by a quarter or more (a model that fails
+        for the tube's sake fails on every half of its cell, and is not split).
         Returns a cell where one still fails (an index along the cell axis) and whether it
         fails for the tube's sake, or ``None``."""
         failing_time = math.inf
@@ -120,7 +121,7 @@ class SampledSearch:
                 not len(invalid)
                 or covered > 0.75 * failing_time
                 or self.floor_of.cells + len(invalid) > MAX_REFINED_CELLS
-                or not self.floor_of.refine(invalid)
+                or not self.floor_of.refine(invalid, own_curvatures=True)
             ):
                 cell = int(np.flatnonzero(~valid)[0])
                 return cell, not bool(splittable[cell])
