@@ -441,6 +441,20 @@ def test_npz_header_declaring_too_many_samples_is_refused_before_reading(tmp_pat
     assert "at most 10000000 samples" in message
 
 
+def test_a_csv_larger_than_its_cap_is_refused_before_reading(tmp_path):
+    """A sparse file one byte over the cap (nothing written, so nothing to read) is refused by its
+    size, pointing at NPZ."""
+    from urpc.trajectory_files import MAX_CSV_BYTES
+
+    path = tmp_path / "huge.csv"
+    with path.open("wb") as stream:
+        stream.truncate(MAX_CSV_BYTES + 1)
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(path, 2)
+    message = str(info.value)
+    assert "huge.csv" in message and "268 MB of CSV are read" in message and ".npz" in message
+
+
 def test_npz_header_declaring_more_than_the_file_holds_is_damaged(tmp_path):
     t, q = rest_samples()
     path = npz_of_members(
