@@ -411,6 +411,39 @@ def test_an_impractical_period_says_what_in_the_box_makes_the_contraction_small(
     assert "narrow the mass and inertia intervals" in figures["advice"]
 
 
+def test_an_impractical_period_blames_the_enclosure_when_the_box_itself_gives_a_large_beta(
+    tmp_path,
+):
+    """The 8-link chain of ``urpc bench certificate`` (every mass +-10 %): its box gives beta =
+    0.82 along the reference (Pinocchio: the law's M_L against each piece's M_U), but over a cell
+    and the tube the inertia models' relative radius leaves 0.04, so the advice says that more
+    cells or a smaller epsilon, not narrower intervals, raise it."""
+    import scipy.linalg
+
+    from urpc.control.box_pieces import split_box
+    from urpc.model.inertia_bounds import InertiaBounds
+    from urpc.studies.benchmark.certificate_cost import benchmark_arm
+
+    robot, box = benchmark_arm("chain8", tmp_path)
+    trajectory = generic_trajectory(box.nominal_robot(robot))
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3)
+    certificate = certify(controller, trajectory, duration=1.0, disturbance_bound=2.0)
+    figures = certificate.figures
+    assert not certificate.certified and certificate.max_sample_period < 1e-4
+    law = controller.inertia_bounds.lower_robot
+    pointwise = [
+        scipy.linalg.eigh(
+            law.M(q), InertiaBounds(robot, piece).upper_robot.M(q), eigvals_only=True
+        )[0]
+        for piece in split_box(box)
+        for q in (trajectory.reference(t).q for t in np.linspace(0.0, 1.0, 21))
+    ]
+    assert min(pointwise) - 0.01 <= figures["beta_center"] <= max(pointwise) + 0.01
+    assert figures["beta_cell"] <= figures["beta_center"] / 2
+    assert f"the box gives beta = {figures['beta_center']:.3g}" in figures["advice"]
+    assert "more first cells" in figures["advice"]
+
+
 def test_continuous_time_theorem_2_is_certified_for_any_epsilon(rr, rr_box):
     controller = urpc.synthesize(rr, rr_box, 1e-3)
     certificate = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)

@@ -383,6 +383,8 @@ class CellFloor:
                     "static": {
                         "valid": valid & (lam_L > 0) & (beta > 0),
                         "lam_L": lam_L, "lam_U": lam_U, "beta": beta, "nu": nu, "K": K,
+                        # beta at the cell's centre, without the models' radii (for the advice).
+                        "beta_center": generalized,
                         "lag_e": lag_e, "lag_M_e": lag_M_e,
                         "R_links": np.array(per_link).reshape(len(links), 2, cells),
                         # M_ii <= (1 + eps_U) (U_c)_ii: the plant's diagonal, for the torques.

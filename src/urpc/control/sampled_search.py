@@ -358,5 +358,8 @@ class SampledSearch:
             out["worst_time"] = float(quantities["cell_start"][cell])
             lightest = lightest_joint(floor_of, quantities, cell)
             out["lightest_joint"] = floor_of.robot.joint_names[lightest]
+            piece = quantities["pieces"][parts.get("piece", 0)]
+            out["beta_cell"] = float(piece["beta"][cell])
+            out["beta_center"] = float(piece["beta_center"][cell])
         out.update(self.controller.gain_law.saturation_figures())
         return out
