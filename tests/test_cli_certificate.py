@@ -170,6 +170,30 @@ def test_certify_reads_the_cache_and_no_cache_computes_again(capsys, counted):
     }
 
 
+def test_certify_cells_reach_the_certificate_and_its_cache_key(capsys, counted, monkeypatch):
+    """``--cells N`` is the certificate's ``cells`` (checked on the call itself), a configuration
+    of its own in the cache (computed again, not read back), and 0 is refused in one line."""
+    from urpc.control import certificate as certificate_module
+
+    asked = []
+    real = certificate_module.certify
+
+    def recording(*args, **kwargs):
+        asked.append(kwargs.get("cells"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(certificate_module, "certify", recording)
+    code, out, _ = _run(capsys, *CERTIFY, "--json")
+    assert code == 0 and asked == [None]
+    code, out, _ = _run(capsys, *CERTIFY, "--cells", 24, "--json")
+    assert code == 0 and asked == [None, 24]
+    assert json.loads(out)["figures"]["cells"] >= 24
+    code, _, _ = _run(capsys, *CERTIFY, "--cells", 24)
+    assert code == 0 and asked == [None, 24]  # read back from the cache
+    code, out, err = _run(capsys, *CERTIFY, "--cells", 0)
+    assert code == 2 and not out and err.count("\n") == 1 and "--cells" in err
+
+
 def test_an_unusable_cache_gives_one_warning_and_the_run_goes_on(
     capsys, counted, tmp_path, monkeypatch
 ):

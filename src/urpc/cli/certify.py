@@ -10,6 +10,7 @@ from .common import (
     add_json_argument,
     add_progress_argument,
     certificate_progress,
+    positive_int,
     print_json,
 )
 
@@ -43,6 +44,15 @@ def register(commands) -> None:
         "(certified with the lowest floor, else the longest certified period); each candidate "
         "costs one certificate",
     )
+    p.add_argument(
+        "--cells",
+        type=positive_int,
+        metavar="N",
+        help="first cells of time the certificate bounds over (default: the reference moves at "
+        "most 0.02 rad per joint within one; 8 to 4000, clipped); more cells tighten the "
+        "inertia models over each, which an impractical period's advice asks for on long or "
+        "light-wristed arms, at a cost about proportional",
+    )
     add_json_argument(p)
     add_certificate_arguments(p, skippable=False)
     add_progress_argument(p, "no progress line (shown only when stderr is a terminal)")
@@ -61,6 +71,7 @@ def run_certify(args) -> int:
             setup,
             controller or build_controller(setup, "interval"),
             refresh=args.no_cache,
+            cells=args.cells,
             progress=certificate_progress(args, setup.robot.dof),
             announce=False,  # the last line of the output says it
         )

@@ -245,8 +245,8 @@ def advice(
                     f"at that cell's centre the box gives beta = {center:.3g}, over the cell "
                     f"and the tube {cell:.3g}: the rest is the inertia models' relative radius "
                     "(the cell's width and the tube's, through the lightest mode), not the box; "
-                    "more first cells (urpc.certify(..., cells=N)) or a smaller epsilon narrow "
-                    "it. The box's own beta: narrow the mass and inertia intervals of the links "
+                    "more first cells (urpc certify --cells N, urpc.certify(..., cells=N)) or a "
+                    "smaller epsilon narrow it. The box's own beta: narrow the mass and inertia intervals of the links "
                     "that joint moves, or lock it"
                 )
             else:

@@ -70,6 +70,7 @@ def cached_setup(
     *,
     cache: bool | CertificateCache = True,
     refresh: bool = False,
+    cells: int | None = None,
     progress: Any = None,
     announce: bool = True,
 ) -> CachedCertificate:
@@ -80,6 +81,8 @@ def cached_setup(
         controller: Its interval controller.
         cache: ``True`` (the default folder), a :class:`CertificateCache`, or ``False``.
         refresh: Compute even when cached, and replace the record.
+        cells: The first cells of time (:func:`urpc.control.certificate.certify`; default
+            chosen from the reference's speed).
         progress: ``True`` for a status line on stderr while it runs and one closing line
             (``certificate: computed in 2.1 s, ...``); a callable receiving those lines; ``None``.
         announce: Give ``progress`` the closing line (a command that prints it in its own
@@ -101,6 +104,7 @@ def cached_setup(
             duration=scenario.duration,
             disturbance_bound=scenario.disturbance,
             actuation_delay=scenario.actuation_delay,
+            cells=cells,
             progress=report.stage if report.active else None,
             cache=cache,
             refresh=refresh,
