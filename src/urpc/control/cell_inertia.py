@@ -35,9 +35,13 @@ CURVATURE_CHUNK_BYTES = 2**28
 STRUCTURED_FROM = 0.05
 #: :func:`structured_terms` takes at most this many bytes of products at a time.
 STRUCTURE_CHUNK_BYTES = 2**26
-#: Per dimension ``n``, the relative rounding of the products ``P mid_kj P^T`` (``gamma_2n``
-#: times the norm of ``|P| |mid_kj| |P|^T``, at most the entrywise term's), with room to spare.
-STRUCTURE_ROUNDING = 4 * 2.0**-53
+#: The rounding of the products ``P mid_kj P^T`` in :func:`structured_terms`: each is off by at
+#: most ``gamma_2n || |P| |mid_kj| |P|^T ||`` (two products of inner dimension ``n``), and each
+#: such norm, weighted as in the sum, is at most the entrywise term (the spectral norm is
+#: monotone on non-negative matrices), so the ``n (n + 1) / 2`` of them cost at most that many
+#: times ``gamma_2n`` (about ``2 n u``) of it: this constant (``u`` with room to spare) times
+#: ``2 n`` and the number of terms.
+STRUCTURE_ROUNDING = 2 * 2.0**-53
 
 
 @dataclasses.dataclass
@@ -118,7 +122,8 @@ def inertia_model(
         chosen = np.flatnonzero(second > STRUCTURED_FROM * floor)
         if len(chosen):
             structured, structured_change = structured_terms(P[chosen], curvature.cells(chosen))
-            rounding = STRUCTURE_ROUNDING * mid.shape[-1]
+            n = mid.shape[-1]
+            rounding = STRUCTURE_ROUNDING * 2 * n * (n * (n + 1) // 2)
             second[chosen] = np.minimum(second[chosen], structured + rounding * second[chosen])
             change[chosen] = np.minimum(
                 change[chosen], structured_change + rounding * change[chosen]
@@ -166,8 +171,9 @@ def structured_terms(P: np.ndarray, curvature: Curvature) -> tuple[np.ndarray, n
     dq_j (mid_kj + E_kj)``, likewise: ``sum_j w_j ||P mid_kj P^T|| + || |P| sum_j w_j rad_kj
     |P|^T ||``. Returns the first (cells,) and the second (cells, k). Where the lightest mode
     couples the joints, ``|P|`` loses the cancellation that ``P mid_kj P^T`` keeps: on an 8-link
-    chain the remainder's term is 0.04 instead of 0.17 of ``lambda_min``. The products' rounding
-    is not included (:data:`STRUCTURE_ROUNDING`)."""
+    chain the centres' part of the remainder's term is 0.04 of ``lambda_min`` instead of 0.17
+    (over a group's box; the radii's part, 0.35 there, is the same either way). The products'
+    rounding is not included (:data:`STRUCTURE_ROUNDING`)."""
     cells, n = P.shape[0], P.shape[-1]
     first, second = np.triu_indices(n)
     factor = np.where(first == second, 0.5, 1.0)
@@ -280,8 +286,8 @@ def curvatures_for(
     outside = np.flatnonzero(~inside)
     lower, upper = outward(q, -1)[outside], outward(q, 1)[outside]
     slack = 1e-12 * (np.abs(lower) + np.abs(upper))
-    own = Ball.hull(lower - slack, upper + slack)
-    extra = curvatures_over(regressor, own, parameters)
+    regions = Ball.hull(lower - slack, upper + slack)
+    extra = curvatures_over(regressor, regions, parameters)
     group = group.copy()
     group[outside] = len(boxes.mid) + np.arange(len(outside))
     return concatenate([curvatures, extra], 0), group
