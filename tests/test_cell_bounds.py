@@ -250,14 +250,15 @@ def test_the_structured_second_order_terms_hold_pinocchio_on_an_8_link_chain(tmp
     entry_remainder, entry_change = taylor_terms(curvatures, group, widths)
     absolute = np.abs(P)
     entrywise = np.array(
-        [np.linalg.norm(a @ r @ a.T, 2) for a, r in zip(absolute, entry_remainder[:, nominal])]
+        [
+            np.linalg.norm(a @ r @ a.T, 2)
+            for a, r in zip(absolute, entry_remainder[:, nominal], strict=True)
+        ]
     )
     assert np.all(remainder < 0.9 * entrywise), (remainder / entrywise).max()  # 0.29-0.78
 
     def slopes(x):
-        return [
-            (robot.M(x + h * unit) - robot.M(x - h * unit)) / (2 * h) for unit in np.eye(n)
-        ]
+        return [(robot.M(x + h * unit) - robot.M(x - h * unit)) / (2 * h) for unit in np.eye(n)]
 
     rng = np.random.default_rng(5)
     for cell in range(len(batch)):
@@ -266,7 +267,11 @@ def test_the_structured_second_order_terms_hold_pinocchio_on_an_8_link_chain(tmp
         for _ in range(6):
             dq = widths[cell] * rng.uniform(0, 1, n) ** 0.2 * rng.choice([-1, 1], n)
             assert np.all(np.abs(dq) <= q.rad[cell])  # inside the box of the second derivatives
-            Z = robot.M(center + dq) - centers[cell] - sum(d * Dk for d, Dk in zip(dq, D))
+            Z = (
+                robot.M(center + dq)
+                - centers[cell]
+                - sum(d * Dk for d, Dk in zip(dq, D, strict=True))
+            )
             value = np.linalg.norm(p @ Z @ p.T, 2)
             assert value <= remainder[cell] * (1 + 1e-6) + 1e-7, (cell, value, remainder[cell])
             for k, slope in enumerate(slopes(center + dq)):

@@ -66,7 +66,10 @@ class Partition:
         edges = np.linspace(0.0, span, first + 1)
         self.batches = [
             CellBatch(
-                edges[:-1], edges[1:], np.zeros(first, dtype=int), np.arange(first) // group_size,
+                edges[:-1],
+                edges[1:],
+                np.zeros(first, dtype=int),
+                np.arange(first) // group_size,
                 np.zeros(first, dtype=bool),
             )
         ]

@@ -59,7 +59,9 @@ from .interval import IntervalPassivityController
 #: 7: Theorem 1 against a disturbance beyond the box's; no largest period when a condition no
 #: period changes fails; cells split without a floor while the floor at rho = 0 falls.
 #: 8: Theorem 1 under a hold is told to raise phi_P, not to shorten the period.
-CERTIFICATE_VERSION = 8
+#: 9: the inertia models' second-order terms (own boxes for the halves of failing cells, the
+#: structure of the second derivatives kept); beta at the cell's centre in the advice.
+CERTIFICATE_VERSION = 9
 #: The condition a delayed torque fails (the law's delay or the plant's actuation delay).
 DELAY_CONDITION = "actuation delay counted by the argument"
 

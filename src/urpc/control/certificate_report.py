@@ -246,11 +246,11 @@ def advice(
                     f"and the tube {cell:.3g}: the rest is the inertia models' relative radius "
                     "(the cell's width and the tube's, through the lightest mode), not the box; "
                     "more first cells (urpc certify --cells N, urpc.certify(..., cells=N)) or a "
-                    "smaller epsilon narrow it. The box's own beta: narrow the mass and inertia intervals of the links "
-                    "that joint moves, or lock it"
+                    "smaller epsilon narrow it. The box's own beta: "
                 )
-            else:
-                text += "narrow the mass and inertia intervals of the links that joint moves, or lock it"
+            text += (
+                "narrow the mass and inertia intervals of the links that joint moves, or lock it"
+            )
         return text
     share = figures["term_shares"][term]
     text += (
