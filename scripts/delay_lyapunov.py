@@ -3,6 +3,7 @@ fail (``scripts/delay_norm_argument.py``), a quadratic form does contract at the
 
     python scripts/delay_lyapunov.py rr_planar
     python scripts/delay_lyapunov.py ur5 --configurations 40 --fractions 1,0.5
+    python scripts/delay_lyapunov.py panda --lock panda_finger_joint1,panda_finger_joint2
 
 Per period, with the law's feedback ``K`` (``T K = s M_L``, ``s = 1`` at the dead-beat ceiling),
 the plant ``M`` and the nominal model ``M0`` that predicts, the error ``r`` and its prediction
@@ -15,10 +16,12 @@ with ``A`` and ``H`` symmetric, the spectrum of ``A`` in ``[s b0, s]`` (``b0 = l
 M_L)``; ``T K <= s M_L <= M0``) and that of ``H`` in ``[h1, h2]`` for every plant of the box
 (``h1 = lambda_min(M_U^-1 M0)``, ``h2 = lambda_max(M_L^-1 M0)``, the box's bounds ``M_L <= M <=
 M_U``). With ``u = A y`` and ``w = H u``, the sectors ``(u - s b0 y).(s y - u) >= 0`` and ``(w -
-h1 u).(h2 u - w) >= 0`` hold whatever the eigenvectors, so a form ``V = [z; y]^T (X (x) 1) [z;
-y]`` with
+h1 u).(h2 u - w) >= 0`` hold whatever the eigenvectors, and so does the coupling ``y.u - b0 |w|^2
+>= 0`` (``T K <= M_L <= M`` gives ``w^T M0^-1/2 M M0^-1/2 w <= y.u``, and ``M >= M_L``), so a form
+``V = [z; y]^T (X (x) 1) [z; y]`` with
 
-    V(z+, y+) - rho^2 V(z, y) + tau1 (u - s b0 y).(s y - u) + tau2 (w - h1 u).(h2 u - w) <= 0
+    V(z+, y+) - rho^2 V(z, y) + tau1 (u - s b0 y).(s y - u) + tau2 (w - h1 u).(h2 u - w)
+        + tau3 (y.u - b0 |w|^2) <= 0
 
 as a quadratic form in ``(z, y, u, w)`` (a 4x4 matrix inequality: every term is a scalar times
 the identity; the S-procedure) contracts by ``rho`` per period for every plant of the box and
@@ -45,12 +48,15 @@ import scipy.optimize
 import urpc
 
 
-def sector_ranges(robot_name: str, configurations: int, seed: int) -> tuple[float, float, float]:
+def sector_ranges(
+    robot_name: str, configurations: int, seed: int, locked: tuple[str, ...] = ()
+) -> tuple[float, float, float]:
     """``(b0, h1, h2)`` of the module docstring, over random configurations of the robot's
-    shipped box (the law's ``M_L`` for ``b0``; the box's bounds for ``h1``, ``h2``)."""
+    shipped box (the law's ``M_L`` for ``b0``; the box's bounds for ``h1``, ``h2``), the
+    ``locked`` joints locked."""
     from urpc.model.inertia_bounds import InertiaBounds
 
-    robot = urpc.load_robot(robot_name)
+    robot = urpc.load_robot(robot_name, locked_joints=locked)
     box = urpc.load_uncertainty(robot_name, robot)
     nominal = box.nominal_robot(robot)
     law = urpc.synthesize(robot, box, epsilon=1e-2, sample_period=1e-3).inertia_bounds
@@ -68,9 +74,42 @@ def sector_ranges(robot_name: str, configurations: int, seed: int) -> tuple[floa
     return float(b0), float(h1), float(h2)
 
 
-def form(x: np.ndarray, rho: float, a1: float, a2: float, h1: float, h2: float) -> np.ndarray:
+def frozen_radius(
+    robot_name: str, configurations: int, seed: int, locked: tuple[str, ...] = ()
+) -> float:
+    """The largest spectral radius of the delayed loop itself, ``[[1, -T M^-1 K], [1, -T M0^-1
+    K]]`` at ``T K = M_L``, frozen at random configurations on every vertex of the box (the
+    first, the last and 30 random ones when it has more than 32): each plant and configuration
+    alone, which the common form must also contract."""
+    robot = urpc.load_robot(robot_name, locked_joints=locked)
+    box = urpc.load_uncertainty(robot_name, robot)
+    nominal = box.nominal_robot(robot)
+    law = urpc.synthesize(robot, box, epsilon=1e-2, sample_period=1e-3).inertia_bounds
+    rng = np.random.default_rng(seed)
+    lower, upper = robot.position_limits
+    lower, upper = np.maximum(lower, -3.0), np.minimum(upper, 3.0)
+    count = 2**box.n_uncertain
+    vertices = range(count) if count <= 32 else [0, count - 1, *rng.integers(0, count, 30)]
+    n, worst = robot.dof, 0.0
+    for vertex in vertices:
+        plant = box.plant(robot, box.vertex(int(vertex)))
+        for _ in range(configurations):
+            q = rng.uniform(lower, upper)
+            TK = law.lower(q)
+            loop = np.block(
+                [
+                    [np.eye(n), -np.linalg.solve(plant.M(q), TK)],
+                    [np.eye(n), -np.linalg.solve(nominal.M(q), TK)],
+                ]
+            )
+            worst = max(worst, float(np.max(np.abs(np.linalg.eigvals(loop)))))
+    return worst
+
+
+def form(x: np.ndarray, rho: float, a1: float, a2: float, h1: float, h2: float, c: float):
     """The 4x4 matrix of the module docstring's inequality over ``(z, y, u, w)``, ``x = (X_12,
-    X_22, tau1, tau2)`` (``X_11 = 1``), ``A``'s range ``[a1, a2]``."""
+    X_22, tau1, tau2, tau3)`` (``X_11 = 1``), ``A``'s range ``[a1, a2]``, the coupling's ``c =
+    b0``."""
     X = np.array([[1.0, x[0]], [x[0], x[1]]])
     step = np.array([[1.0, 0, 0, -1], [1, 0, -1, 0]])  # (z+, y+) = (z - w, z - u)
     now = np.array([[1.0, 0, 0, 0], [0, 1, 0, 0]])
@@ -80,44 +119,50 @@ def form(x: np.ndarray, rho: float, a1: float, a2: float, h1: float, h2: float) 
     second = np.zeros((4, 4))  # (w - h1 u).(h2 u - w)
     second[2, 3] = second[3, 2] = (h1 + h2) / 2
     second[2, 2], second[3, 3] = -h1 * h2, -1.0
-    return step.T @ X @ step - rho**2 * now.T @ X @ now + x[2] * first + x[3] * second
+    coupling = np.zeros((4, 4))  # y.u - c |w|^2
+    coupling[1, 2] = coupling[2, 1] = 0.5
+    coupling[3, 3] = -c
+    return (
+        step.T @ X @ step - rho**2 * now.T @ X @ now
+        + x[2] * first + x[3] * second + x[4] * coupling
+    )  # fmt: skip
 
 
-def _worst(x, rho, a1, a2, h1, h2) -> float:
-    if x[2] < 0 or x[3] < 0 or x[1] - x[0] ** 2 <= 1e-9:
+def _worst(x, *ranges) -> float:
+    if np.min(x[2:]) < 0 or x[1] - x[0] ** 2 <= 1e-9:
         return 1e3  # tau >= 0 and X positive definite
-    return float(np.linalg.eigvalsh(form(x, rho, a1, a2, h1, h2))[-1])
+    return float(np.linalg.eigvalsh(form(x, *ranges))[-1])
 
 
-def feasible(rho, a1, a2, h1, h2, seed: int = 0) -> np.ndarray | None:
+def feasible(rho, a1, a2, h1, h2, c, seed: int = 0) -> np.ndarray | None:
     """``x`` whose form is negative definite (largest eigenvalue below ``-1e-9``), or ``None``
     when none is found (a convex problem: restarts only guard the simplex search)."""
     rng = np.random.default_rng(seed)
-    starts = [np.array([0.0, 1.0, 1.0, 1.0])]
-    starts += [np.abs(rng.normal(size=4)) * [rng.choice([-1, 1]), 3, 3, 3] for _ in range(11)]
+    starts = [np.array([0.0, 1.0, 1.0, 1.0, 1.0])]
+    starts += [np.abs(rng.normal(size=5)) * [rng.choice([-1, 1]), 3, 3, 3, 3] for _ in range(11)]
     for start in starts:
         if start[1] <= start[0] ** 2:
             start[1] = start[0] ** 2 + 1.0
         found = scipy.optimize.minimize(
-            _worst, start, args=(rho, a1, a2, h1, h2), method="Nelder-Mead",
-            options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 4000},
+            _worst, start, args=(rho, a1, a2, h1, h2, c), method="Nelder-Mead",
+            options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 6000},
         )  # fmt: skip
         if found.fun < -1e-9:
             return found.x
     return None
 
 
-def common_rate(a1, a2, h1, h2) -> tuple[float, np.ndarray] | None:
+def common_rate(a1, a2, h1, h2, c) -> tuple[float, np.ndarray] | None:
     """The smallest ``rho`` (bisection to 1e-4, from 0.98 times the per-mode radius, which no
     common form beats) with a feasible form, and its ``x``; ``None`` when none below 1 is
     found."""
-    best = feasible(1.0 - 1e-9, a1, a2, h1, h2)
+    best = feasible(1.0 - 1e-9, a1, a2, h1, h2, c)
     if best is None:
         return None
-    low, high = 0.98 * per_mode_radius(a1, a2, h1, h2), 1.0 - 1e-9
+    low, high = 0.98 * per_mode_radius(a1, a2, h1, h2, c), 1.0 - 1e-9
     while high - low > 1e-4:
         middle = 0.5 * (low + high)
-        x = feasible(middle, a1, a2, h1, h2)
+        x = feasible(middle, a1, a2, h1, h2, c)
         if x is None:
             low = middle
         else:
@@ -125,19 +170,23 @@ def common_rate(a1, a2, h1, h2) -> tuple[float, np.ndarray] | None:
     return high, best
 
 
-def per_mode_radius(a1, a2, h1, h2, points: int = 81) -> float:
+def per_mode_radius(a1, a2, h1, h2, c: float = 0.0, points: int = 81) -> float:
     """The largest spectral radius of the 2x2 loop ``[[1, -h a], [1, -a]]`` over a grid of
-    ``a`` in ``[a1, a2]`` and ``h`` in ``[h1, h2]`` (``A``, ``H`` sharing their eigenvectors)."""
+    ``a`` in ``[a1, a2]`` and ``h`` in ``[h1, h2]`` that the coupling admits (``c h^2 a <= 1``):
+    ``A``, ``H`` sharing their eigenvectors, loops any common form must contract."""
     worst = 0.0
     for a in np.linspace(a1, a2, points):
         for h in np.linspace(h1, h2, points):
-            worst = max(worst, float(np.max(np.abs(np.linalg.eigvals([[1, -h * a], [1, -a]])))))
+            if c * h * h * a <= 1.0:
+                loop = [[1, -h * a], [1, -a]]
+                worst = max(worst, float(np.max(np.abs(np.linalg.eigvals(loop)))))
     return worst
 
 
-def largest_ratio(x, a1, a2, h1, h2, dof: int = 6, draws: int = 2000, seed: int = 1) -> float:
+def largest_ratio(x, a1, a2, h1, h2, c, dof: int = 6, draws: int = 2000, seed: int = 1) -> float:
     """The largest ``V(z+, y+) / V(z, y)`` over random symmetric ``A``, ``H`` with unrelated
-    eigenvectors (half of them with every eigenvalue at an end of its range)."""
+    eigenvectors (half of them with every eigenvalue at an end of its range) that the coupling
+    admits (``A^1/2 H^2 A^1/2 <= 1 / c``; the others are drawn again)."""
     rng = np.random.default_rng(seed)
     X = np.array([[1.0, x[0]], [x[0], x[1]]])
 
@@ -149,9 +198,13 @@ def largest_ratio(x, a1, a2, h1, h2, dof: int = 6, draws: int = 2000, seed: int 
     def V(z, y):
         return X[0, 0] * z @ z + 2 * X[0, 1] * z @ y + X[1, 1] * y @ y
 
-    worst = 0.0
-    for k in range(draws):
+    worst, k = 0.0, 0
+    while k < draws:
         A, H = symmetric(a1, a2, k % 2 == 0), symmetric(h1, h2, k % 2 == 0)
+        root = np.linalg.cholesky(A)
+        if c * np.linalg.eigvalsh(root.T @ H @ H @ root)[-1] > 1.0:
+            continue
+        k += 1
         z, y = rng.normal(size=dof), rng.normal(size=dof)
         worst = max(worst, V(z - H @ A @ y, z - A @ y) / V(z, y))
     return worst
@@ -162,27 +215,31 @@ def main(argv=None) -> int:
     parser.add_argument("robot", help="a robot with a shipped box (urpc robots)")
     parser.add_argument("--configurations", type=int, default=40, help="sampled (40)")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--lock", default="", help="comma-separated joints to lock (none)")
     parser.add_argument(
         "--fractions", default="1", help="comma-separated s of T K = s M_L (default 1: dead-beat)"
     )
     args = parser.parse_args(argv)
-    b0, h1, h2 = sector_ranges(args.robot, args.configurations, args.seed)
+    locked = tuple(j.strip() for j in args.lock.split(",") if j.strip())
+    b0, h1, h2 = sector_ranges(args.robot, args.configurations, args.seed, locked)
     print(
         f"{args.robot} ({args.configurations} configurations): b0 = {b0:.3f}, H in "
-        f"[{h1:.3f}, {h2:.3f}]"
+        f"[{h1:.3f}, {h2:.3f}]; the frozen loops of the box's vertices at the ceiling, largest "
+        f"radius {frozen_radius(args.robot, 10, args.seed, locked):.3f}"
     )
     for s in (float(v) for v in args.fractions.split(",") if v.strip()):
         a1, a2 = s * b0, s
-        found = common_rate(a1, a2, h1, h2)
-        modes = per_mode_radius(a1, a2, h1, h2)
+        found = common_rate(a1, a2, h1, h2, b0)
+        modes = per_mode_radius(a1, a2, h1, h2, b0)
         if found is None:
             print(f"  T K = {s:g} M_L: no common form found (per-mode radius {modes:.3f})")
             continue
         rho, x = found
-        ratio = largest_ratio(x, a1, a2, h1, h2)
+        ratio = largest_ratio(x, a1, a2, h1, h2, b0)
         print(
             f"  T K = {s:g} M_L: common rate rho = {rho:.3f} (per-mode radius {modes:.3f}); "
-            f"X = [[1, {x[0]:.3f}], [{x[0]:.3f}, {x[1]:.3f}]], tau = ({x[2]:.3f}, {x[3]:.3f}); "
+            f"X = [[1, {x[0]:.3f}], [{x[0]:.3f}, {x[1]:.3f}]], tau = ({x[2]:.3f}, {x[3]:.3f}, "
+            f"{x[4]:.3f}); "
             f"largest V+/V over 2000 random draws {ratio:.3f} <= rho^2 = {rho * rho:.3f}"
         )
     return 0
