@@ -33,6 +33,13 @@ def write_csv(path, header, t, q):
     return path
 
 
+def load_refused(*args) -> str:
+    """The message of the InputError that ``urpc.load_samples(*args)`` raises."""
+    with pytest.raises(urpc.InputError) as info:
+        urpc.load_samples(*args)
+    return str(info.value)
+
+
 def scenario(tmp_path, trajectory):
     path = tmp_path / "scenario.yaml"
     path.write_text(yaml.safe_dump({**BASE, "trajectory": trajectory}))
@@ -60,9 +67,7 @@ def test_truncated_npz_is_not_a_zip_archive(tmp_path):
 def test_text_saved_as_npz_is_not_a_zip_archive(tmp_path):
     path = tmp_path / "text.npz"
     path.write_text("t,q1,q2\n0,0,0\n1,1,1\n")
-    with pytest.raises(urpc.InputError) as info:
-        urpc.load_samples(path, 2)
-    message = str(info.value)
+    message = load_refused(path, 2)
     assert "text.npz" in message and "not a zip archive" in message
     assert "pickled" not in message
 
@@ -82,9 +87,7 @@ def test_npz_array_of_the_wrong_shape_names_the_key_and_both_shapes(tmp_path, ke
     arrays[key] = value(q)
     path = tmp_path / "shape.npz"
     np.savez(path, **arrays)
-    with pytest.raises(urpc.InputError) as info:
-        urpc.load_samples(path, 2)
-    message = str(info.value)
+    message = load_refused(path, 2)
     assert "shape.npz" in message and f"field '{key}'" in message
     assert f"has shape {shape}" in message and "(samples x joints) = (201, 2)" in message
 
@@ -222,9 +225,8 @@ def test_csv_unknown_or_repeated_names_are_refused(tmp_path, header, expected):
     columns = header.count(",") + 1
     path.write_text(header + "\n" + "\n".join(",".join([str(k)] * columns) for k in range(3)))
     robot = urpc.load_robot("rr_planar")
-    with pytest.raises(urpc.InputError) as info:
-        urpc.load_samples(path, 2, robot.joint_names)
-    assert "names.csv" in str(info.value) and expected in str(info.value)
+    message = load_refused(path, 2, robot.joint_names)
+    assert "names.csv" in message and expected in message
 
 
 def test_csv_currently_valid_layouts_still_load(tmp_path):
@@ -244,9 +246,8 @@ def test_csv_currently_valid_layouts_still_load(tmp_path):
 def test_csv_rows_with_too_many_or_too_few_values_name_the_line(tmp_path, row, count):
     path = tmp_path / "ragged.csv"
     path.write_text(f"t,q1,q2\n0,0,0\n# a comment\n{row}\n2,0,0\n")
-    with pytest.raises(urpc.InputError) as info:
-        urpc.load_samples(path, 2)
-    assert f"ragged.csv: line 4 has {count} values; the header has 3 columns" in str(info.value)
+    message = load_refused(path, 2)
+    assert f"ragged.csv: line 4 has {count} values; the header has 3 columns" in message
 
 
 def test_csv_value_not_a_number_names_the_line_and_column(tmp_path):
@@ -389,9 +390,8 @@ def test_the_limits_grid_of_an_unknown_kind_is_bounded():
 def test_csv_errors_name_the_real_line_past_comments_and_blank_lines(tmp_path, text, expected):
     path = tmp_path / "skips.csv"
     path.write_text(text)
-    with pytest.raises(urpc.InputError) as info:
-        urpc.load_samples(path, 2)
-    assert "skips.csv" in str(info.value) and expected in str(info.value)
+    message = load_refused(path, 2)
+    assert "skips.csv" in message and expected in message
 
 
 def test_npz_samples_name_no_line(tmp_path):
@@ -424,9 +424,7 @@ def npy_header(shape, descr="<f8") -> bytes:
 
 def test_npz_member_that_is_not_npy_data_names_the_array(tmp_path):
     path = npz_of_members(tmp_path / "plan.npz", t="garbage", q="garbage")
-    with pytest.raises(urpc.InputError) as info:
-        urpc.load_samples(path, 2)
-    message = str(info.value)
+    message = load_refused(path, 2)
     assert "plan.npz: field 't': array 't' (member t.npy) is not a numpy array" in message
     assert "numpy.savez" in message
 
@@ -434,9 +432,7 @@ def test_npz_member_that_is_not_npy_data_names_the_array(tmp_path):
 def test_npz_header_declaring_too_many_samples_is_refused_before_reading(tmp_path):
     header = npy_header((10**11,))
     path = npz_of_members(tmp_path / "bomb.npz", t=header + bytes(64), q=header + bytes(64))
-    with pytest.raises(urpc.InputError) as info:
-        urpc.load_samples(path, 2)
-    message = str(info.value)
+    message = load_refused(path, 2)
     assert "bomb.npz: field 't'" in message and "declares shape (100000000000,)" in message
     assert "at most 10000000 samples" in message
 
@@ -449,9 +445,7 @@ def test_a_csv_larger_than_its_cap_is_refused_before_reading(tmp_path):
     path = tmp_path / "huge.csv"
     with path.open("wb") as stream:
         stream.truncate(MAX_CSV_BYTES + 1)
-    with pytest.raises(urpc.InputError) as info:
-        urpc.load_samples(path, 2)
-    message = str(info.value)
+    message = load_refused(path, 2)
     assert "huge.csv" in message and "268 MB of CSV are read" in message and ".npz" in message
 
 
@@ -462,9 +456,7 @@ def test_npz_header_declaring_more_than_the_file_holds_is_damaged(tmp_path):
         t=npy_header((201,)) + t.tobytes(),
         q=npy_header((201, 2)) + bytes(8),
     )
-    with pytest.raises(urpc.InputError) as info:
-        urpc.load_samples(path, 2)
-    message = str(info.value)
+    message = load_refused(path, 2)
     assert "short.npz: field 'q'" in message and "(3216 bytes), but holds 8 bytes" in message
 
 
@@ -547,9 +539,7 @@ def test_a_streamed_target_whose_move_overflows_is_refused_and_not_taken():
 def test_a_unit_in_the_time_header_is_told_what_to_write(tmp_path):
     path = tmp_path / "units.csv"
     path.write_text("t [s],q1,q2\n0,0,0\n0.1,0,0\n")
-    with pytest.raises(urpc.InputError) as info:
-        urpc.load_samples(path, 2)
-    message = str(info.value)
+    message = load_refused(path, 2)
     assert "units.csv: field 't': the first column is 't [s]'; expected 't' or 'time'" in message
     assert "with no unit in the name" in message
 
@@ -560,10 +550,9 @@ def test_a_unit_in_the_time_header_is_told_what_to_write(tmp_path):
 def test_a_semicolon_csv_is_told_to_use_commas(tmp_path, text, name):
     path = tmp_path / "semi.csv"
     path.write_text(text)
-    with pytest.raises(urpc.InputError) as info:
-        urpc.load_samples(path, 2)
-    assert f"semi.csv: line 1 separates its values with {name}" in str(info.value)
-    assert "comma-separated" in str(info.value)
+    message = load_refused(path, 2)
+    assert f"semi.csv: line 1 separates its values with {name}" in message
+    assert "comma-separated" in message
 
 
 def test_a_tab_separated_csv_is_told_to_use_commas(tmp_path):
@@ -577,9 +566,8 @@ def test_a_tab_separated_csv_is_told_to_use_commas(tmp_path):
 def test_csv_values_python_alone_would_read_are_refused(tmp_path, cell):
     path = tmp_path / "odd.csv"
     path.write_text(f"t,q1,q2\n0,0,0\n1,{cell},0\n", encoding="utf-8")
-    with pytest.raises(urpc.InputError) as info:
-        urpc.load_samples(path, 2)
-    assert f"odd.csv: line 3, column 'q1': '{cell}' is not a number" in str(info.value)
+    message = load_refused(path, 2)
+    assert f"odd.csv: line 3, column 'q1': '{cell}' is not a number" in message
 
 
 def test_a_device_is_not_a_regular_file(tmp_path):
