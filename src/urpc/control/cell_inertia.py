@@ -185,12 +185,13 @@ def structured_terms(P: np.ndarray, curvature: Curvature) -> tuple[np.ndarray, n
         p, box, w = P[part], curvature.group[part], curvature.widths[part]
         pt, absolute = np.swapaxes(p, -1, -2), np.abs(p)
         absolute_t = np.swapaxes(absolute, -1, -2)
-        norms = spectral_norm(p[:, None] @ curvature.mid[box][:, first, second] @ pt[:, None])
+        pairs = curvature.mid[box[:, None], first, second]  # (cells, pairs, n, n)
+        norms = spectral_norm(p[:, None] @ pairs @ pt[:, None])
         full = np.zeros((len(p), n, n))
         full[:, first, second] = norms
         full[:, second, first] = norms  # ||P mid_kj P^T||, (cells, k, j)
         weights = factor * w[:, first] * w[:, second]
-        radial = np.einsum("cp,cpab->cab", weights, curvature.rad[box][:, first, second])
+        radial = np.einsum("cp,cpab->cab", weights, curvature.rad[box[:, None], first, second])
         remainder[part] = np.sum(weights * norms, axis=-1) + spectral_norm(
             absolute @ radial @ absolute_t
         )
