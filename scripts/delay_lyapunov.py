@@ -23,18 +23,16 @@ h1 u).(h2 u - w) >= 0`` hold whatever the eigenvectors, and so does the coupling
     V(z+, y+) - rho^2 V(z, y) + tau1 (u - s b0 y).(s y - u) + tau2 (w - h1 u).(h2 u - w)
         + tau3 (y.u - b0 |w|^2) <= 0
 
-as a quadratic form in ``(z, y, u, w)`` (a 4x4 matrix inequality: every term is a scalar times
-the identity; the S-procedure) contracts by ``rho`` per period for every plant of the box and
-every configuration, ``A``, ``H`` changing from period to period, their eigenvectors
-unrelated. The smallest ``rho`` is found by bisection, each step a convex search over ``X``,
-``tau1``, ``tau2`` (the largest eigenvalue of the form, minimized). Next to it: the per-mode
-radius (``A``, ``H`` sharing their eigenvectors: 2x2 loops over a grid of the two ranges), a
-bound from below for any ``rho``, and the largest ``V+ / V`` over random non-commuting draws.
+as a quadratic form in ``(z, y, u, w)`` contracts by ``rho`` per period for every plant of the
+box and every configuration (``urpc.control.delay_form``, which the certificate uses: a convex
+solver finds the form, exact rational arithmetic proves it). Next to it: the per-mode radius
+(``A``, ``H`` sharing their eigenvectors: 2x2 loops over a grid of the two ranges), a bound from
+below for any ``rho``, and the largest ``V+ / V`` over random non-commuting draws.
 
-The ranges are sampled (random configurations within the joint limits, clipped to +-3): evidence
-for the path, not a certificate, which would bound them over cells and add the forcing (the
-mismatch, the disturbance, the prediction's own error, the change of metric between periods)
-in this form's metric.
+The ranges are sampled here (random configurations within the joint limits, clipped to +-3),
+the law's ``M_L`` against the nominal model at the same point: a quick look at a box. The
+certificate (``urpc certify`` with ``delay: 1``, docs/sampled-data.md §7) bounds them over cells
+of the reference, adds the forcing and the perturbations, and proves the rate it uses.
 """
 
 from __future__ import annotations
@@ -43,9 +41,9 @@ import argparse
 
 import numpy as np
 import scipy.linalg
-import scipy.optimize
 
 import urpc
+from urpc.control.delay_form import SectorRanges, common_form, per_mode_radius
 
 
 def sector_ranges(
@@ -106,89 +104,13 @@ def frozen_radius(
     return worst
 
 
-def form(x: np.ndarray, rho: float, a1: float, a2: float, h1: float, h2: float, c: float):
-    """The 4x4 matrix of the module docstring's inequality over ``(z, y, u, w)``, ``x = (X_12,
-    X_22, tau1, tau2, tau3)`` (``X_11 = 1``), ``A``'s range ``[a1, a2]``, the coupling's ``c =
-    b0``."""
-    X = np.array([[1.0, x[0]], [x[0], x[1]]])
-    step = np.array([[1.0, 0, 0, -1], [1, 0, -1, 0]])  # (z+, y+) = (z - w, z - u)
-    now = np.array([[1.0, 0, 0, 0], [0, 1, 0, 0]])
-    first = np.zeros((4, 4))  # (u - a1 y).(a2 y - u)
-    first[1, 2] = first[2, 1] = (a1 + a2) / 2
-    first[1, 1], first[2, 2] = -a1 * a2, -1.0
-    second = np.zeros((4, 4))  # (w - h1 u).(h2 u - w)
-    second[2, 3] = second[3, 2] = (h1 + h2) / 2
-    second[2, 2], second[3, 3] = -h1 * h2, -1.0
-    coupling = np.zeros((4, 4))  # y.u - c |w|^2
-    coupling[1, 2] = coupling[2, 1] = 0.5
-    coupling[3, 3] = -c
-    return (
-        step.T @ X @ step - rho**2 * now.T @ X @ now
-        + x[2] * first + x[3] * second + x[4] * coupling
-    )  # fmt: skip
-
-
-def _worst(x, *ranges) -> float:
-    if np.min(x[2:]) < 0 or x[1] - x[0] ** 2 <= 1e-9:
-        return 1e3  # tau >= 0 and X positive definite
-    return float(np.linalg.eigvalsh(form(x, *ranges))[-1])
-
-
-def feasible(rho, a1, a2, h1, h2, c, seed: int = 0) -> np.ndarray | None:
-    """``x`` whose form is negative definite (largest eigenvalue below ``-1e-9``), or ``None``
-    when none is found (a convex problem: restarts only guard the simplex search)."""
-    rng = np.random.default_rng(seed)
-    starts = [np.array([0.0, 1.0, 1.0, 1.0, 1.0])]
-    starts += [np.abs(rng.normal(size=5)) * [rng.choice([-1, 1]), 3, 3, 3, 3] for _ in range(11)]
-    for start in starts:
-        if start[1] <= start[0] ** 2:
-            start[1] = start[0] ** 2 + 1.0
-        found = scipy.optimize.minimize(
-            _worst, start, args=(rho, a1, a2, h1, h2, c), method="Nelder-Mead",
-            options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 6000},
-        )  # fmt: skip
-        if found.fun < -1e-9:
-            return found.x
-    return None
-
-
-def common_rate(a1, a2, h1, h2, c) -> tuple[float, np.ndarray] | None:
-    """The smallest ``rho`` (bisection to 1e-4, from 0.98 times the per-mode radius, which no
-    common form beats) with a feasible form, and its ``x``; ``None`` when none below 1 is
-    found."""
-    best = feasible(1.0 - 1e-9, a1, a2, h1, h2, c)
-    if best is None:
-        return None
-    low, high = 0.98 * per_mode_radius(a1, a2, h1, h2, c), 1.0 - 1e-9
-    while high - low > 1e-4:
-        middle = 0.5 * (low + high)
-        x = feasible(middle, a1, a2, h1, h2, c)
-        if x is None:
-            low = middle
-        else:
-            high, best = middle, x
-    return high, best
-
-
-def per_mode_radius(a1, a2, h1, h2, c: float = 0.0, points: int = 81) -> float:
-    """The largest spectral radius of the 2x2 loop ``[[1, -h a], [1, -a]]`` over a grid of
-    ``a`` in ``[a1, a2]`` and ``h`` in ``[h1, h2]`` that the coupling admits (``c h^2 a <= 1``):
-    ``A``, ``H`` sharing their eigenvectors, loops any common form must contract."""
-    worst = 0.0
-    for a in np.linspace(a1, a2, points):
-        for h in np.linspace(h1, h2, points):
-            if c * h * h * a <= 1.0:
-                loop = [[1, -h * a], [1, -a]]
-                worst = max(worst, float(np.max(np.abs(np.linalg.eigvals(loop)))))
-    return worst
-
-
-def largest_ratio(x, a1, a2, h1, h2, c, dof: int = 6, draws: int = 2000, seed: int = 1) -> float:
+def largest_ratio(form, dof: int = 6, draws: int = 2000, seed: int = 1) -> float:
     """The largest ``V(z+, y+) / V(z, y)`` over random symmetric ``A``, ``H`` with unrelated
     eigenvectors (half of them with every eigenvalue at an end of its range) that the coupling
     admits (``A^1/2 H^2 A^1/2 <= 1 / c``; the others are drawn again)."""
     rng = np.random.default_rng(seed)
-    X = np.array([[1.0, x[0]], [x[0], x[1]]])
+    X = form.X
+    a1, a2, h1, h2, c = (getattr(form.ranges, k) for k in ("a1", "a2", "h1", "h2", "c"))
 
     def symmetric(low, high, ends):
         basis, _ = np.linalg.qr(rng.normal(size=(dof, dof)))
@@ -228,19 +150,17 @@ def main(argv=None) -> int:
         f"radius {frozen_radius(args.robot, 10, args.seed, locked):.3f}"
     )
     for s in (float(v) for v in args.fractions.split(",") if v.strip()):
-        a1, a2 = s * b0, s
-        found = common_rate(a1, a2, h1, h2, b0)
-        modes = per_mode_radius(a1, a2, h1, h2, b0)
-        if found is None:
-            print(f"  T K = {s:g} M_L: no common form found (per-mode radius {modes:.3f})")
+        ranges = SectorRanges(s * b0, s, h1, h2, b0)
+        form = common_form(ranges)
+        modes = per_mode_radius(ranges)
+        if form is None:
+            print(f"  T K = {s:g} M_L: no common form proved (per-mode radius {modes:.3f})")
             continue
-        rho, x = found
-        ratio = largest_ratio(x, a1, a2, h1, h2, b0)
         print(
-            f"  T K = {s:g} M_L: common rate rho = {rho:.3f} (per-mode radius {modes:.3f}); "
-            f"X = [[1, {x[0]:.3f}], [{x[0]:.3f}, {x[1]:.3f}]], tau = ({x[2]:.3f}, {x[3]:.3f}, "
-            f"{x[4]:.3f}); "
-            f"largest V+/V over 2000 random draws {ratio:.3f} <= rho^2 = {rho * rho:.3f}"
+            f"  T K = {s:g} M_L: common rate rho = {form.rate:.3f} (per-mode radius "
+            f"{modes:.3f}); X = [[1, {form.x12:.3f}], [{form.x12:.3f}, {form.x22:.3f}]], "
+            f"t = ({form.t[0]:.3f}, {form.t[1]:.3f}, {form.t[2]:.3f}); largest V+/V over 2000 "
+            f"random draws {largest_ratio(form):.3f} <= rho^2 = {form.rate**2:.3f}"
         )
     return 0
 
