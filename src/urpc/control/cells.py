@@ -23,6 +23,7 @@ import numpy as np
 
 from ..model.inertia_bounds import InertiaBounds
 from ..model.regressor_balls import Ball, BallRegressor, Jet, matvec, parameters_of
+from ..model.verified_norms import spectral_norm
 from ..trajectories import Trajectory, covered_span
 from .box_pieces import split_box
 from .cell_bounds import MismatchNorms, coriolis_coefficients, velocity_bound
@@ -208,10 +209,18 @@ class CellFloor:
         law_rate_norm = velocity_bound(
             np.sum(reference_velocity.magnitude * slopes, axis=-1), slopes, 0.0, ed, ed_norm
         ) / (1 - np.minimum(law.eps, 0.999999))
+        nominal = enclosed["nominal"]
+        slopes = enclosed["nominal_slopes"]
+        nominal_rate_norm = velocity_bound(
+            np.sum(reference_velocity.magnitude * slopes, axis=-1), slopes, 0.0, ed, ed_norm
+        ) / (1 - np.minimum(nominal.eps, 0.999999))
         # Drives: smooth terms per component (values and rates), and the drive torque's rate.
         drive, drive_rate = self.joints.mismatch(qd_a, qdd_a) or (None, None)
         torque_rate_max = enclosed["torque_rate"] + self.joints.nominal_torque_rate(qd_a, qdd_a)
-        out = dict(enclosed["global"], r_max=float(r_max), mu_law=law_rate_norm, pieces=[])
+        out = dict(
+            enclosed["global"], r_max=float(r_max), mu_law=law_rate_norm,
+            mu_nominal=nominal_rate_norm, pieces=[],
+        )  # fmt: skip
         for piece in enclosed["pieces"]:
             metrics = piece["metrics"]
             R, RM, Rs, V = piece["R"], piece["RM"], piece["Rs"], piece["V"]
@@ -243,8 +252,12 @@ class CellFloor:
                     rate_inverse_M=RdotM[0], inverse_change_M=metric_change,
                     lag=lag, lag_M=lag_M,
                     coriolis=gamma + piece["gamma_delta"], metric_rate=metric_rate,
+                    gamma=gamma, gamma_delta=piece["gamma_delta"],
                 )
             )  # fmt: skip
+        # C0 of the nominal plant (in the box, so in a piece) in the metric of any piece's
+        # M_L, which M0 dominates: the largest of the pieces' bounds.
+        out["gamma_nominal"] = np.max([p["gamma"] for p in out["pieces"]], axis=0)
         return out
 
     def _tube_enclosures(
@@ -310,10 +323,38 @@ class CellFloor:
         per_r = Kr_max * rows_M0 * (1 + LAPACK_MARGIN) + rows_C0
         if self.joints.box is not None:
             per_r = per_r + self.joints.box.nominal[0] * Kr_max
+        # For the delayed law (urpc.control.delay_bound): the nominal model's range, the law's
+        # M_L against it (through the nominal centre's factor), the nominal torque's Jacobian
+        # along e in the 2-norm, and the reference's jerk.
+        eps0 = np.minimum(nominal.eps, 0.999999)
+        eps_law = np.minimum(law.eps, 0.999999)
+        law_over_nominal = np.linalg.eigvalsh(congruence(nominal.inverse_factor, law.center))
+        jerk = self._states(batch, 0.0, 0.0, extension)[2].dot.rad
+        # ||M0^-1/2 (G pi0) M0^-1/2|| through the nominal centre's factor P0 (the Jacobian's
+        # ball and the products' rounding entrywise), over the cell: / (1 - eps0).
+        P0 = nominal.inverse_factor
+        jacobian_mid = np.swapaxes(along_error.mid, -1, -2)  # (cells, i, k): d tau_i / d e_k
+        slack = np.swapaxes(along_error.rad, -1, -2) + 4 * (self.dof + 1) * np.finfo(
+            float
+        ).eps * np.abs(jacobian_mid)  # the ball, and the rounding of the centre's products
+        torque_per_error_N = (
+            spectral_norm(P0 @ jacobian_mid @ np.swapaxes(P0, -1, -2))
+            + spectral_norm(np.abs(P0) @ slack @ np.swapaxes(np.abs(P0), -1, -2))
+        ) / (1 - eps0)
+        if self.joints.box is not None:  # d/de (Ia0 qdd_a + Dv0 qd_a) at r = 0
+            Dv0 = self.joints.box.nominal[1]
+            # |N^-1/2 diag N^-1/2| <= Kr^2 (Ia0 <= N) + max Dv0 Kr / lambda_min(N)
+            torque_per_error_N = (
+                torque_per_error_N
+                + Kr_max**2
+                + float(np.max(Dv0)) * Kr_max / (nominal.lam_min * (1 - eps0))
+            )
         enclosed = {
             "reference_velocity": reference_velocity,
             "law": law,
             "law_slopes": model_slopes[1],
+            "nominal": nominal,
+            "nominal_slopes": model_slopes[0],
             "torque_rate": np.abs(torque_rate.mid) + torque_rate.rad,
             "global": {
                 "tube": float(tube),
@@ -325,6 +366,24 @@ class CellFloor:
                 "law_inverse_diagonal": np.diagonal(law.inverse, axis1=-2, axis2=-1),
                 "plant_torque": plant_torque * (1 + 1e-12),
                 "torque_per_r": per_r * (1 + 1e-12),
+                "nominal_lam_min": nominal.lam_min * (1 - eps0) * (1 - LAPACK_MARGIN),
+                "nominal_lam_max": nominal.lam_max * (1 + nominal.eps) * (1 + LAPACK_MARGIN),
+                "nominal_eps": nominal.eps,
+                "law_lam_max": law.lam_max * (1 + law.eps) * (1 + LAPACK_MARGIN),
+                "law_over_nominal_low": law_over_nominal[:, 0]
+                * (1 - eps_law)
+                / (1 + nominal.eps)
+                * (1 - LAPACK_MARGIN),
+                "law_over_nominal_high": law_over_nominal[:, -1]
+                * (1 + law.eps)
+                / (1 - eps0)
+                * (1 + LAPACK_MARGIN),
+                "torque_per_error_N": torque_per_error_N * (1 + 1e-9),
+                "jerk": np.sqrt(np.sum(jerk**2, axis=-1)) * (1 + 1e-12),
+                # ||M_L^-1/2 (M_L(q') - M_L(q)) M_L^-1/2|| <= ||q' - q|| ||s|| / (1 - eps).
+                "law_slope_norm": np.sqrt(np.sum(model_slopes[1] ** 2, axis=-1))
+                / (1 - eps_law)
+                * (1 + 1e-12),
             },
             "pieces": [],
         }
@@ -344,6 +403,12 @@ class CellFloor:
                 high * (1 + nominal.eps) / (1 - np.minimum(lower.eps, 0.999999)) - 1.0,
             )
             nu = np.where(valid, nu, math.inf)
+            # The spectrum of M^-1 M0 over the piece (the delayed law's H), and the law's M_L
+            # against the piece's: lambda_max(M_L,piece^-1 M_L,law) (its coupling).
+            h1 = low * (1 - eps0) / (1 + upper.eps) * (1 - LAPACK_MARGIN)
+            h2 = high * (1 + nominal.eps) / (1 - np.minimum(lower.eps, 0.999999))
+            law_over_lower = np.linalg.eigvalsh(congruence(lower.inverse_factor, law.center))
+            kappa = law_over_lower[:, -1] * (1 + law.eps) / (1 - np.minimum(lower.eps, 0.999999))
             beta = beta * (1 - LAPACK_MARGIN)
             nu = nu * (1 + LAPACK_MARGIN) + LAPACK_MARGIN
             metrics = MismatchNorms(law, upper)
@@ -385,6 +450,9 @@ class CellFloor:
                         "lam_L": lam_L, "lam_U": lam_U, "beta": beta, "nu": nu, "K": K,
                         # beta at the cell's centre, without the models' radii (for the advice).
                         "beta_center": generalized,
+                        "h1": np.where(valid, h1, 0.0),
+                        "h2": np.where(valid, h2 * (1 + LAPACK_MARGIN), math.inf),
+                        "kappa": np.where(valid, kappa * (1 + LAPACK_MARGIN), math.inf),
                         "lag_e": lag_e, "lag_M_e": lag_M_e,
                         "R_links": np.array(per_link).reshape(len(links), 2, cells),
                         # M_ii <= (1 + eps_U) (U_c)_ii: the plant's diagonal, for the torques.

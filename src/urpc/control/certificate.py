@@ -61,8 +61,10 @@ from .interval import IntervalPassivityController
 #: 8: Theorem 1 under a hold is told to raise phi_P, not to shorten the period.
 #: 9: the inertia models' second-order terms (own boxes for the halves of failing cells, the
 #: structure of the second derivatives kept); beta at the cell's centre in the advice.
-CERTIFICATE_VERSION = 9
-#: The condition a delayed torque fails (the law's delay or the plant's actuation delay).
+#: 10: the delayed law certified behind its own one-sample delay (docs/sampled-data.md §7).
+CERTIFICATE_VERSION = 10
+#: The condition on the delay: the law's must be the plant's actuation delay (0, or 1 for the
+#: delayed law, whose loop has its own argument).
 DELAY_CONDITION = "actuation delay counted by the argument"
 
 
@@ -195,21 +197,40 @@ def certify(
         checked_count("cells", cells, 1, ", or None (chosen from the reference's speed)")
     conditions = controller.gain_law.conditions()
     law_delay = int(controller.delay)
-    delay = max(law_delay, actuation_delay_of(controller, actuation_delay))
-    if delay:  # the argument of docs/sampled-data.md §2 is for a torque acting at its sample
-        late = count(delay, "sample")
-        why = (
-            "the one-sample-delay law (delay: 1) predicts with the nominal model, whose error "
-            "the argument does not bound yet"
-            if law_delay
-            else f"this plant applies each torque {late} later (actuation_delay), which the "
-            "undelayed law does not predict"
-        )
+    plant_delay = actuation_delay_of(controller, actuation_delay)
+    # The argument covers a torque acting over its sample's period (docs/sampled-data.md §2) and
+    # the delayed law behind the one-sample delay it predicts over (§7); nothing else.
+    delay = 0 if plant_delay == law_delay else max(law_delay, plant_delay)
+    if law_delay and not delay:
         conditions.append(
             Condition(
-                DELAY_CONDITION, False, float(delay), 0.0,
-                f"the certificate covers a torque that acts over the period of its sample; {why}:"
-                " certify the configuration without delay",
+                DELAY_CONDITION, True, float(law_delay), float(law_delay),
+                "the one-sample delay the law predicts over is counted (docs/sampled-data.md "
+                "§7: a common quadratic form of the delayed loop)",
+            )
+        )  # fmt: skip
+    if delay:
+        late = count(delay, "sample")
+        if law_delay:
+            why = (
+                f"this plant applies each torque {count(plant_delay, 'sample')} after its "
+                f"sample (actuation_delay) while the law predicts over "
+                f"{count(law_delay, 'sample')}: synthesize the law with delay: {plant_delay}"
+                if plant_delay <= 1
+                else f"this plant applies each torque {late} late (actuation_delay), more "
+                "than the one sample the delayed law predicts over"
+            )
+        else:
+            why = (
+                f"this plant applies each torque {late} later (actuation_delay), which the "
+                "undelayed law does not predict: certify the configuration without delay"
+                + (", or synthesize the law with delay: 1" if plant_delay == 1 else "")
+            )
+        conditions.append(
+            Condition(
+                DELAY_CONDITION, False, float(plant_delay), float(law_delay),
+                "the certificate covers a torque acting over the period of its sample, and "
+                f"the delayed law behind the one-sample delay it predicts over; {why}",
             )
         )  # fmt: skip
     floor_of = CellFloor(controller, trajectory, duration, cells=cells)
@@ -244,13 +265,19 @@ def certify(
         if delay:  # no period or epsilon makes up for a delay the argument does not count
             others = [c for c in conditions if c.name != DELAY_CONDITION]
             undelayed = all(c.holds for c in others) and floor <= controller.epsilon
+            fix = (
+                f"synthesize the law with delay: {plant_delay}"
+                if plant_delay <= 1
+                else "the argument covers the delays of 0 and 1 sample the laws predict over"
+            )
             figures["advice"] = (
-                f"no period or epsilon certifies a torque acting {late} late: the argument "
-                "covers a torque acting over the period of its sample; without the "
+                "no period or epsilon certifies a plant that applies each torque "
+                f"{count(plant_delay, 'sample')} after its sample behind a law that predicts "
+                f"over {count(law_delay, 'sample')}: {fix}; behind its own delay the law "
                 + (
-                    "delay this configuration is certified" if undelayed
-                    else f"delay: {note}" if note is not None
-                    else "delay it is not certified either"
+                    "is certified" if undelayed
+                    else f"is not certified either ({note})" if note is not None
+                    else "is not certified either"
                 )
             )  # fmt: skip
     ordered = tuple(sorted(conditions, key=lambda c: c.holds))

@@ -223,6 +223,19 @@ def advice(
             f"{figures.get('beta', math.nan):.3g} once T phi_P passes the inertia), or state "
             "`disturbance: unknown` for Theorem 2's adaptive gains"
         )
+    if term is None and "delay_ranges" in figures:  # the delayed law (docs/sampled-data.md §7)
+        rate = figures.get("delay_rate")
+        if rate is None:
+            return text + (
+                "; no common quadratic form contracts the delayed loop over this box (the "
+                "nominal model it predicts with is too far from some of its plants): narrow "
+                "the mass and inertia intervals, or run without delay"
+            )
+        return text + (
+            f"; the delayed loop's form contracts by {rate:.3g} per period and the period's "
+            f"perturbations (of order T Kr and T |qd|) take the rest (margin "
+            f"{figures.get('margin', math.nan):.3g}): a shorter period or a lower Kr helps"
+        )
     if term is None:
         margin = figures.get("margin", math.nan)
         text += (

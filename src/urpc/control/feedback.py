@@ -216,8 +216,9 @@ class ImplicitFeedback(FeedbackLaw):
         if math.isfinite(floor):
             figures.update(torque_figures(search, controller, d, quantities, parts))
         conditions += _sampled_conditions(
-            figures, floor, controller.epsilon, max_period, controller.adaptive
-        )
+            figures, floor, controller.epsilon, max_period, controller.adaptive,
+            bool(controller.delay),
+        )  # fmt: skip
         return LawArgument(floor, conditions, figures, max_period)
 
     def advice(self, controller, argument):
@@ -247,7 +248,12 @@ def feedback_law(
 
 
 def _sampled_conditions(
-    figures: dict[str, float], floor: float, epsilon: float, max_period: float, adaptive: bool
+    figures: dict[str, float],
+    floor: float,
+    epsilon: float,
+    max_period: float,
+    adaptive: bool,
+    delayed: bool = False,
 ) -> list[Condition]:
     """The sampled law's conditions; each explanation says what to change when the condition
     fails, and what holds when it holds. With constant gains (Theorem 1, not ``adaptive``) the
@@ -284,7 +290,12 @@ def _sampled_conditions(
         ("contraction a exceeds the perturbation b (at r = 0)", margin > 0, margin, 0.0,
          "shorten the sample period or lower Kr (b grows with T Kr and T |qd|)" if adaptive
          else CONSTANT_GAIN_FIX,
-         f"a period contracts the error by a - b = {margin:.3g} at least, in the plant's metric"),
+         f"a period contracts the error by a - b = {margin:.3g} at least, in the plant's metric")
+        if not delayed else
+        ("delayed loop: the common form's rate plus the period's perturbation below 1",
+         margin > 0, margin, 0.0, _delayed_fix(figures),
+         f"a period contracts the delayed loop's form by {margin:.3g} at least (its rate "
+         f"{figures.get('delay_rate', math.nan):.3g} plus the perturbations of order T Kr)"),
         ("ultimate bound below epsilon", floor <= epsilon, floor, epsilon, fix_floor,
          f"the error ends below the floor {floor:.3g} rad <= epsilon"),
     ]  # fmt: skip
@@ -292,6 +303,24 @@ def _sampled_conditions(
         Condition(name, holds, value, limit, held if holds else fix)
         for name, holds, value, limit, fix, held in specs
     ]
+
+
+def _delayed_fix(figures: dict) -> str:
+    """What to change when the delayed loop does not contract (docs/sampled-data.md §7)."""
+    rate = figures.get("delay_rate")
+    if rate is None:
+        ranges = figures.get("delay_ranges") or {}
+        return (
+            "no common quadratic form contracts the delayed loop over this box (A in ["
+            f"{ranges.get('a1', math.nan):.3g}, {ranges.get('a2', math.nan):.3g}], M^-1 M0 in "
+            f"[{ranges.get('h1', math.nan):.3g}, {ranges.get('h2', math.nan):.3g}]): the "
+            "nominal model is too far from some plants of the box; narrow the mass and "
+            "inertia intervals, or run without delay"
+        )
+    return (
+        f"the form contracts by {rate:.3g} per period and the perturbations of order T Kr, "
+        "T |qd| add the rest: shorten the sample period or lower Kr"
+    )
 
 
 #: What to change when a period does not contract under Theorem 1's constant gains.

@@ -179,20 +179,33 @@ class PeriodBound:
             "torque_lag": 0.5 * T * T * lag,
         }
 
-    def _piece_floor(self, T, d, D, q: dict, p: dict, tube: float) -> tuple[float, dict]:
-        if not np.all(p["valid"]):
-            cell = int(np.flatnonzero(~p["valid"])[0])
-            return math.inf, {"margin": -math.inf, "invalid_cell": cell, "gain_D": D}
-        terms = self.cell_terms(T, d, D, q, p, tube)
-        margin_cells = terms["margin"]
-        worst_cell = int(np.argmin(margin_cells))
-        margin = float(margin_cells[worst_cell])
-        parts = {
-            "contraction": float(np.min(terms["contraction"])),
-            "margin": margin,
+    @staticmethod
+    def invalid_parts(p: dict, D: float) -> dict | None:
+        """The parts of a piece where an inertia model fails on some cell (no floor), or
+        ``None``."""
+        if np.all(p["valid"]):
+            return None
+        cell = int(np.flatnonzero(~p["valid"])[0])
+        return {"margin": -math.inf, "invalid_cell": cell, "gain_D": D}
+
+    @staticmethod
+    def margin_parts(terms: dict, D: float, contraction: float) -> dict:
+        """The least margin over the cells, where it is, the gain and the contraction."""
+        worst_cell = int(np.argmin(terms["margin"]))
+        return {
+            "contraction": contraction,
+            "margin": float(terms["margin"][worst_cell]),
             "gain_D": float(D),
             "margin_cell": worst_cell,
         }
+
+    def _piece_floor(self, T, d, D, q: dict, p: dict, tube: float) -> tuple[float, dict]:
+        invalid = self.invalid_parts(p, D)
+        if invalid is not None:
+            return math.inf, invalid
+        terms = self.cell_terms(T, d, D, q, p, tube)
+        parts = self.margin_parts(terms, D, float(np.min(terms["contraction"])))
+        margin = parts["margin"]
         if not margin > 0:
             return math.inf, parts
         sqrt_L_min = float(np.sqrt(terms["lam_L"].min()))

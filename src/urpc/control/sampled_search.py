@@ -14,6 +14,7 @@ import numpy as np
 
 from .cells import CellFloor
 from .certificate_report import dominant_link, lightest_joint
+from .delay_bound import DelayedPeriodBound
 from .interval import IntervalPassivityController
 from .period_bound import PeriodBound
 
@@ -58,7 +59,8 @@ class SampledSearch:
         progress: Callable[[str], Any] | None = None,
     ):
         self.floor_of, self.controller, self.d = floor_of, controller, d
-        self.bound = PeriodBound(floor_of)
+        # The delayed law's loop has its own one-period bound (urpc.control.delay_bound).
+        self.bound = (DelayedPeriodBound if controller.delay else PeriodBound)(floor_of)
         self.say = progress or (lambda message: None)
         self.T = controller.sample_period
         self.extension = 2.0 * self.T
