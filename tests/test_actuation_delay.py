@@ -87,6 +87,34 @@ def test_delay_zero_is_the_undelayed_run_and_a_delayed_law_gets_its_delay(rr, rr
     assert np.array_equal(default.q, one.q) and not np.array_equal(default.q, mismatched.q)
 
 
+def test_the_prediction_takes_the_nominal_drives_off_the_torque(ur5):
+    """On the UR5 with joint drives the nominal plant (armature, damping, Coulomb friction,
+    integrated by the simulator's own scheme) moves over one period as the delayed law
+    predicts, to second order in the period; a prediction that let the drives' compensation
+    accelerate the arm (as before) is off by their whole torque over the period."""
+    from urpc.sim.plants.pinocchio_plant import PinocchioPlant
+    from urpc.studies.scenario import load_scenario
+
+    box = urpc.load_uncertainty(load_scenario("ur5/joint_friction").uncertainty, ur5)
+    T = 1e-3
+    controller = urpc.synthesize(ur5, box, 1e-2, sample_period=T, delay=1)
+    nominal = box.plant(ur5)  # the nominal robot, drives included
+    plant = PinocchioPlant(nominal)
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        q = rng.uniform(-2, 2, 6)
+        qd = rng.choice([-1, 1], 6) * rng.uniform(0.3, 1.0, 6)  # outside the stiction band
+        tau = nominal.g(q) + rng.uniform(-5, 5, 6)
+        plant.reset(q, qd)
+        after = plant.step(tau, T)
+        q_hat, qd_hat = controller.predict(q, qd, tau)
+        rigid = qd + T * nominal.forward_dynamics(q, qd, tau)
+        moved = np.linalg.norm(after.qd - qd)
+        assert np.linalg.norm(after.qd - qd_hat) <= 0.02 * moved
+        assert np.linalg.norm(after.q - q_hat) <= 1e-6
+        assert np.linalg.norm(after.qd - rigid) > 0.2 * moved
+
+
 def test_the_simulated_delay_is_the_virtual_robots(rr_rig):
     """The same law and plant in lock step with the virtual arm's one-sample delay (its own
     bookkeeping of the torque in flight) and in ``simulate`` with ``actuation_delay=1``, both

@@ -6,15 +6,18 @@ On most torque interfaces the torque computed from the sample at ``t_k`` reaches
 law computed at ``t_k`` therefore acts on the state at ``t_{k+1}``, which it predicts from the sample
 and the torque already on its way, with the nominal model (armature included)::
 
-    qdd_k     = M0(q_k)^-1 (u_{k-1} - C0(q_k, qd_k) qd_k - g0(q_k))      (one ABA)
+    qdd_k     = M0(q_k)^-1 (u_{k-1} - C0(q_k, qd_k) qd_k - g0(q_k) - f0(qd_k))    (one ABA)
     q_{k+1}^  = q_k + T qd_k + T^2/2 qdd_k,       qd_{k+1}^ = qd_k + T qdd_k
 
-and evaluates the interval law (implicit or paper, :mod:`urpc.control.feedback`) at
-``(t_k + T, q_{k+1}^, qd_{k+1}^)`` against the reference one period ahead, extrapolated from the
+(``f0(qd) = Dv0 qd + Fc0 sat(qd / v_s)``, the nominal joint drives' damping and friction, when
+the box has drives) and evaluates the interval law (implicit or paper,
+:mod:`urpc.control.feedback`) at ``(t_k + T, q_{k+1}^, qd_{k+1}^)`` against the reference one
+period ahead, extrapolated from the
 reference at ``t_k`` by its Taylor polynomial (``q_d + T qd_d + T^2/2 qdd_d``, ``qd_d + T qdd_d``,
 ``qdd_d``; the error is ``T^3/6`` and ``T^2/2`` times the reference's jerk: 8e-9 rad and 2.5e-5 rad/s
-for the paper's trajectory at 1 kHz). The prediction's error is the mismatch torque acting over
-one period, ``O(T^2 ||M^-1 w||)`` in position: what the robust term already has to dominate.
+for the paper's trajectory at 1 kHz). The prediction's error (the mismatch over one period, and
+the feedback through the nominal model instead of the plant's) is bounded by the certificate's
+own argument for this law (:mod:`urpc.control.delay_bound`, docs/sampled-data.md §7).
 The adaptation integrates ``f(||e_k||)`` of the measured error, as without delay.
 
 The controller's state is ``[s, u_{k-1}]`` (the gain integral of Theorem 2, when adaptive, then
@@ -28,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..model.joint_dynamics import friction_torque
 from ..trajectories import Reference
 from .interval import IntervalPassivityController
 
@@ -60,8 +64,13 @@ class DelayedIntervalController(IntervalPassivityController):
     def predict(
         self, q: np.ndarray, qd: np.ndarray, torque: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """The nominal model's ``(q, qd)`` one period after ``(q, qd)`` under ``torque`` held."""
+        """The nominal model's ``(q, qd)`` one period after ``(q, qd)`` under ``torque`` held
+        (its joint drives included: the damping and Coulomb friction at ``qd`` take their part
+        of the torque, as the law's compensation of them at ``qd_a`` expects)."""
         T = self.sample_period
+        joints = self.bound.joints
+        if joints is not None:
+            torque = torque - friction_torque(joints.nominal[1], joints.nominal[2], qd)
         qdd = self.robot.forward_dynamics(q, qd, torque)
         return q + T * qd + (0.5 * T * T) * qdd, qd + T * qdd
 

@@ -18,28 +18,35 @@ mismatch with the disturbance, ``lag(t) = tau0(x(t)) - tau0(x_k)``):
 reference, ``qdd0 = N^-1 (u_{k-1} - C0 qd - g0)``, written out). In ``N``'s metric they are the
 loop of :mod:`urpc.control.delay_form` plus a perturbation ``(zeta, eta)``:
 
-    z+ = z - H A y + zeta,    y+ = z - A y + eta,    |zeta| <= B_zz |z| + B_zy |y| + f_z,
-                                                     |eta|  <= B_yz |z| + B_yy |y| + f_y
+    z+ = z - H A y + zeta,    y+ = z - A y + eta,    |zeta| <= f_z + B_z . v,
+                                                     |eta|  <= f_y + B_y . v
 
-with every entry of ``B`` of order ``T`` and the forcing ``f`` (the mismatch, the disturbance, the
-torque's lag, the reference's extrapolation, the position's prediction error) bounded over the
-cell, the tube and the piece. The ranges of ``A``, ``H`` and the coupling are bounded over every
-cell of a piece, and a common form with rate ``rho`` is proved over them
-(:func:`~urpc.control.delay_form.common_form`), so that per period
+with ``v = (|z|, |y|, |z - y|)`` (``z - y``: the prediction's error), every entry of ``B`` of order
+``T`` and the forcing ``f`` (the disturbance, the torque's lag, the mismatch's change within the
+period, the reference's extrapolation, the position's prediction error) bounded over the cell,
+the tube and the piece. The ranges of ``A``, ``H`` and the coupling are bounded over every cell of
+a piece, and a common form with rate ``rho`` is proved over them
+(:func:`~urpc.control.delay_form.common_form`). The mismatch at ``r = 0``, ``w0``, is split off:
+the loop frozen at the sample has the equilibrium ``xi* = (N^1/2 r*, N^1/2 r^*)``, ``r^* = K'^-1
+w0``, ``r* = r^* + T N^-1 w0``, exactly, and the deviation ``xi - xi*`` obeys, per period,
 
-    ||xi_{k+1}||_X <= g (rho + ||B||_X) ||xi_k||_X + g ||f||_X,     g = (1 + T mu0)^1/2
+    ||xi_{k+1} - xi*_{k+1}||_X <= g (rho + ||B||_X) ||xi_k - xi*_k||_X
+                                    + g (||f||_X + ||B v*||_X) + ||xi*_k - xi*_{k+1}||_X
 
-(``g``: the change of the metric ``M0(q)`` from ``t_k`` to ``t_{k+1}``, ``mu0`` the nominal
-inertia's relative rate), and ``||xi||_X`` ends up below ``max g ||f||_X / (1 - max g (rho +
-||B||_X))`` over the cells. Back to ``r``: ``|z| <= ||xi||_X / s_z`` and ``||r|| <= |z| /
-lambda_min(M0)^1/2``, plus the motion within a period; ``||e|| <= sup ||r|| / min Kr``, plus the
-prediction's position error for the predicted state, which the tube must hold too.
+(``g = (1 + T mu0)^1/2``: the change of the metric ``M0(q)`` from ``t_k`` to ``t_{k+1}``, ``mu0``
+the nominal inertia's relative rate; ``||B||_X`` from the coordinates' scales ``|z| <= l_z
+||xi||_X`` ...), so it ends below the largest forcing over the least margin ``1 - g (rho +
+||B||_X)`` over the cells. Back to ``r``: the equilibrium's ``||r*||``, plus the deviation through
+``l_z`` and ``lambda_min(M0)``, plus the distance of ``r(t)`` from its chord between the samples;
+``||e|| <= sup ||r(t)|| / min Kr``, plus the predicted position's error, which the tube must hold
+too (the law evaluates ``M_L`` and ``tau0`` there).
 
 Every conversion between the metrics uses the piece's ranges: ``h1 <= lambda(M^-1 M0) <= h2``,
 ``lambda(M0^-1 M_L) in [b_lo, b_hi]`` (the law's lower bound at the predicted point against the
 nominal model at the sample), ``||M^-1/2 X M^-1/2|| <= ||M_L^-1/2 X M_L^-1/2||``, and within a
-period ``(1 - mu T) M_k <= M(t) <= (1 + mu T) M_k`` (``mu = 2 Gamma``). The terms are derived in
-docs/sampled-data.md §7, one per line of :meth:`DelayedPeriodBound.cell_terms`.
+period ``(1 - mu T) M_k <= M(t) <= (1 + mu T) M_k`` (``mu = 2 Gamma``). The terms are listed in
+docs/sampled-data.md §7 and derived in the numbered comments of
+:meth:`DelayedPeriodBound._parts`.
 """
 
 from __future__ import annotations
