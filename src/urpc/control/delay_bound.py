@@ -166,9 +166,11 @@ class DelayedPeriodBound(PeriodBound):
             + 2.0 * self.joints.coulomb / root_N_low  # nominal Coulomb at qd against qd_a
         )
         # (6) The plant's side, |M(t)^-1/2 J(t)|: w0 (the mismatch at r = 0), disturbance,
-        # torque lag; perturbations proportional to r(t): (M - M0) Kr r, the Coriolis
-        # mismatch, the damping, the plant's C r (c_r, in the plant's metric), and the lag's
-        # r-part L(t) r(t) - L_k r_k (L_k (r(t) - r_k) and the change of L).
+        # torque lag; perturbations proportional to r(t) (the Coriolis mismatch, the damping,
+        # the plant's C r: c_rest, in the plant's metric) and the Kr terms of w's r-part and of
+        # the lag's, (M - M0) Kr r(t) + M0(t) Kr r(t) - M0_k Kr r_k = M Kr (r(t) - r_k) + (M -
+        # M0) Kr r_k + (M0(t) - M0_k) Kr r_k, and the lag's C0 terms, -C0(t) (r(t) - r_k) -
+        # (C0(t) - C0_k) r_k: on r_k (alpha) and on r(t) - r_k (beta).
         R = p["RM"][0] + tube * p["RM"][1]  # >= |M^-1/2 w0|, |M_L^-1/2 w0|, |M^1/2 M_L^-1 w0|
         R_euclid = p["R"][0] + tube * p["R"][1]  # >= ||M_L^-1 w0||
         V = p["V"][0] + tube * p["V"][1]  # >= ||w0||
@@ -176,13 +178,14 @@ class DelayedPeriodBound(PeriodBound):
         lag = p["lag_M"] + error_rate * p["lag_M_e"]
         w_rate_M = p["rate_inverse_M"] + error_rate * p["RM"][1]  # |M^-1/2 dw0/dt|
         w_rate = p["rate"] + error_rate * p["V"][1]  # ||dw0/dt||
-        c_r = p["K"] * p["nu"] + p["gamma_delta"] + damping / lam_L + p["gamma"]
+        c_rest = p["gamma_delta"] + damping / lam_L + p["gamma"]
         alpha0_sup = R + d / np.sqrt(lam_L) + T * lag + s2 * dc
         # w0 frozen at the sample is split off (the equilibrium below): within the period its
         # change is left, with the disturbance and the lag.
         alpha0_int = d / np.sqrt(lam_L) + 0.5 * T * (lag + w_rate_M) + s2 * dc
-        alpha = (c_r * omega + s2 * (rate_N * T * kN + 2 * gamma0)) * Z_ + s2 * dT
-        beta = c_r * omega + s2 * (kN + gamma0 + rate_N * T * kN + 2 * gamma0)
+        alpha = ((c_rest + p["K"] * p["nu"]) * omega + s2 * (rate_N * T * kN + 2 * gamma0)) * Z_
+        alpha = alpha + s2 * dT
+        beta = (c_rest + p["K"]) * omega + s2 * gamma0
         with np.errstate(invalid="ignore", divide="ignore"):
             denominator = 1 - s2 * beta * T
             usable &= denominator > 0
