@@ -864,3 +864,13 @@ def test_theorem_1_under_a_hold_is_told_to_raise_its_constant_gain(rr, rr_box):
     theorem_2 = certify(adaptive, PaperTrajectory(), **options)
     assert theorem_1.certified and theorem_2.certified
     assert theorem_1.epsilon_floor == pytest.approx(theorem_2.epsilon_floor, rel=1e-9)
+    # The feedback caps D at the ceiling: saturated Theorem 2 gains and phi_P at the ceiling
+    # give the same D at every sample; a phi_P below it leaves D = kappa ||rho|| + phi_P free
+    # to move between samples, which the bound then counts (docs/sampled-data.md §1).
+    from urpc.control.period_bound import PeriodBound
+
+    varies = {
+        name: PeriodBound(CellFloor(c, PaperTrajectory(), 4.0)).gain_varies(1e-3)
+        for name, c in (("small", small), ("raised", raised), ("adaptive", adaptive))
+    }
+    assert varies == {"small": True, "raised": False, "adaptive": False}

@@ -326,18 +326,26 @@ def test_implicit_law_contracts_on_every_sampled_plant_for_every_gain():
 
 
 def test_implicit_feedback_is_the_dense_formula_for_every_gain():
-    """The step's Cholesky form ``D (r - D T y)`` against ``D (M_L + D T)^-1 M_L r`` written out."""
+    """The step's Cholesky form ``D (r - D T y)`` against ``D (M_L + D T)^-1 M_L r`` written out,
+    ``D`` capped at ``phi_max`` (docs/sampled-data.md §1): above it the torque is the cap's, to
+    the bit, so that once the gains have saturated the feedback is the same at every sample."""
     T = 1e-3
     _, _, controller = _panda_controller(T)
+    cap = controller.phi_max
+    assert controller.feedback.gain_cap == cap and 1e3 < cap < 1e6
     rng = np.random.default_rng(6)
     for _ in range(5):
         q, r = rng.uniform(-1, 1, 7), rng.normal(size=7)
         ML = controller.inertia_bounds.lower(q)
-        for gain in (1.0, 50.0, 5e3, 1e6, 1e9):
-            dense = gain * np.linalg.solve(ML + gain * T * np.eye(7), ML @ r)
+        for gain in (1.0, 50.0, 5e3, cap * (1 - 1e-9), 1e6, 1e9):
+            D = min(gain, cap)
+            dense = D * np.linalg.solve(ML + D * T * np.eye(7), ML @ r)
             np.testing.assert_allclose(
-                controller.feedback.torque(q, gain, r), dense, rtol=1e-8, atol=1e-9 * gain * T
+                controller.feedback.torque(q, gain, r), dense, rtol=1e-8, atol=1e-9 * D * T
             )
+        above = controller.feedback.torque(q, 1e9, r)
+        assert np.array_equal(above, controller.feedback.torque(q, cap, r))
+        assert not np.array_equal(above, controller.feedback.torque(q, 0.5 * cap, r))
 
 
 def test_implicit_law_tends_to_the_paper_law_as_the_period_vanishes():

@@ -142,7 +142,8 @@ def add_scenario_arguments(p, simulate: bool = True) -> None:
         "a real torque interface (1: the torque computed at t_k acts from t_k + T; zero torque "
         "until the first one arrives); sampled runs only; default: the scenario's "
         "actuation_delay, else the law's own delay (--delay, else 0). The certificate covers "
-        "no delay: a configuration with one is not certified",
+        "the delay the law predicts over (0, or 1 with --delay 1, at short periods: "
+        "docs/sampled-data.md section 7); any other delay is not certified",
     )
     if not simulate:  # (the certificate bounds every disturbance: no model to choose)
         p.set_defaults(

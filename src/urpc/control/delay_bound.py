@@ -211,8 +211,9 @@ class DelayedPeriodBound(PeriodBound):
         r_hat_star = T * R_euclid + V / D
         r_star = r_hat_star + T * R / root_N_low
         # (11) Its motion over a period, in the next sample's metric: T M_L^-1 w0 along the
-        # motion, w0 / D (D moves with ||rho||: all of it), the law's M_L at the predicted
-        # positions instead of the actual ones, T N^-1 w0.
+        # motion, w0 / D (where D moves with ||rho||, all of it: gain_varies), the law's M_L
+        # at the predicted positions instead of the actual ones, T N^-1 w0.
+        jumps = float(self.gain_varies(T))
         rate_law = w_rate_M + p["inverse_change_M"] * (p["Rs"][0] + tube * p["Rs"][1])
         eta = dq * q["law_slope_norm"]
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -220,7 +221,7 @@ class DelayedPeriodBound(PeriodBound):
             predicted_M_L = np.where(usable, eta / (1 - eta), 0.0)
             motion_y = (
                 T * T * np.sqrt(h2 * (1 + muT)) * rate_law
-                + root_N * (T * w_rate + V) / D
+                + root_N * (T * w_rate + jumps * V) / D
                 + 2 * T * predicted_M_L * R / np.sqrt(q["law_over_nominal_low"])
             )
             metric_step = T * rate_N / (1 - T * rate_N) * np.sqrt(1 + T * rate_N)

@@ -110,6 +110,8 @@ class IntervalPassivityController(Controller):
         period = None if sample_period is None else float(sample_period)
         self._feedback = feedback_law(period, sampled_law, inertia_bounds)
         self.phi_max = self._feedback.phi_ceiling(self.phi_P)
+        if isinstance(self._feedback, ImplicitFeedback):  # D capped where adaptation stops
+            self._feedback.gain_cap = self.phi_max
         if bound.disturbance_bound is None:
             self._gain_law: GainLaw = AdaptiveGains(
                 self.kappa_P, self.kappa_I, self.phi_P, self.phi_I, self.epsilon, self.phi_max

@@ -44,6 +44,14 @@ class PeriodBound:
         c = self.controller
         return c.gain_law.settled_phi(c.feedback.phi_ceiling(c.phi_P, T))
 
+    def gain_varies(self, T: float) -> bool:
+        """Whether the law's ``D`` can differ from one sample to the next once the gains have
+        saturated: the implicit law caps ``D`` at its ceiling, which Theorem 2's gains reach
+        (and Theorem 1's ``phi_P`` when it is at least the ceiling), so ``D`` is then the cap
+        at every sample; below it ``D = kappa ||rho|| + phi_P`` moves with ``||rho||``."""
+        c = self.controller
+        return self.gain(T) < c.feedback.phi_ceiling(c.phi_P, T)
+
     def floor_at(
         self, T: float, d: float, quantities: dict, tube: float | None = None
     ) -> tuple[float, dict]:
@@ -165,6 +173,13 @@ class PeriodBound:
         mu = p["metric_rate"]
         response_motion = T * ((mu + q["mu_law"]) / safe_a + mu) * response_M
         forcing = (T * (T * rate_M + sqrt_U * rate / D) + response_motion) * (1 + growth)
+        # Where the gain D = kappa ||rho|| + phi_P moves from one sample to the next with
+        # ||rho|| (only D >= phi_P is known; gain_varies), r* and r_d are those of the
+        # dead-beat loop (D = inf, T K = M_L: r* = T M_L^-1 w; every bound above holds for it),
+        # and the law's K_k differs from it by ||M^-1/2 T (K_inf - K_k) M^-1/2|| <= lambda_U /
+        # (D T) (per mode lambda_L - lambda_L / (1 + lambda_L / (D T))), acting on r* + r_d.
+        # Where D is capped and saturated it is the same at every sample: nothing to add.
+        gain_change = np.minimum(lam_U / (D * T), 1.0) * float(self.gain_varies(T))
         return {
             "valid": p["valid"],
             "contraction": a,
@@ -174,7 +189,8 @@ class PeriodBound:
             "response": response,
             "slow": equilibrium + response,
             "forcing": forcing,
-            "pushed": forcing + b * (equilibrium_M + response_M) * (1 + growth),
+            "pushed": forcing + (b + gain_change) * (equilibrium_M + response_M) * (1 + growth),
+            "gain_change": gain_change,
             "mismatch": T * R + V / D,
             "torque_lag": 0.5 * T * T * lag,
         }
@@ -234,12 +250,14 @@ class PeriodBound:
         self, T: float, d: float, quantities: dict, tube: float, r_sup: float
     ) -> np.ndarray:
         """Per joint, a bound [N m] of the torque the law commands once ``||e||`` is within the
-        floor's regime (docs/sampled-data.md §3, "Torques"): with ``r = r* + r_d + delta``,
-        ``tau0 + K r* = tau0 + w`` is the plant's own torque, ``K r_d = sum_j M^1/2 A (1-A)^j
-        M^-1/2 d_j`` is at most ``sqrt(M_ii) S(a) d / sqrt(lambda_L)`` with
-        ``S(a) = sum_j max_{a <= x <= 1} x (1-x)^j``, and ``K delta = M^1/2 (A / T) M^1/2 delta``
-        at most ``sqrt(M_ii) ||delta||_M / T``; the law's nominal torque at ``r != 0`` adds
-        ``torque_per_r ||r||`` with ``||r|| <= r_sup``; the largest over the cells and pieces."""
+        floor's regime (docs/sampled-data.md §3, "Torques"): with ``r = r* + r_d + delta`` (the
+        dead-beat loop's ``r* = T M_L^-1 w`` and ``r_d``), ``tau0 + K r* = tau0 + w - (M_L - T
+        K) M_L^-1 w`` is the plant's own torque less at most ``sqrt(M_ii) g ||M_L^-1/2 w||``
+        (``g = lambda_U / (D T)``), ``K r_d = sum_j M^1/2 A (1 - A_inf)^j M^-1/2 d_j`` is at most
+        ``sqrt(M_ii) (S(a) + g / a) d / sqrt(lambda_L)`` with ``S(a) = sum_j max_{a <= x <= 1}
+        x (1-x)^j``, and ``K delta = M^1/2 (A / T) M^1/2 delta`` at most ``sqrt(M_ii)
+        ||delta||_M / T``; the law's nominal torque at ``r != 0`` adds ``torque_per_r ||r||``
+        with ``||r|| <= r_sup``; the largest over the cells and pieces."""
         d = d + self.joints.coulomb
         D = self.gain(T)
         bound = np.zeros(self.dof)
@@ -250,11 +268,13 @@ class PeriodBound:
                 return np.full(self.dof, math.inf)
             delta_M = float(np.max(terms["pushed"])) / margin + float(np.max(terms["forcing"]))
             root = np.sqrt(p["upper_diagonal"])
-            response = response_sum(terms["contraction"]) * d / np.sqrt(p["lam_L"])
+            a, change = terms["contraction"], terms["gain_change"]
+            response = (response_sum(a) + change / a) * d / np.sqrt(p["lam_L"])
+            mismatch = change * (p["RM"][0] + tube * p["RM"][1])  # >= g ||M_L^-1/2 w||
             piece = (
                 quantities["plant_torque"]
                 + quantities["torque_per_r"] * r_sup
-                + root * (response[:, None] + delta_M / T)
+                + root * ((response + mismatch)[:, None] + delta_M / T)
             )
             bound = np.maximum(bound, piece.max(axis=0))
         return bound * (1 + 1e-12)
