@@ -73,14 +73,27 @@ class DelayedPeriodBound(PeriodBound):
         """The ranges of ``A``, ``H`` and the coupling over every cell of piece ``p``:
         ``D T / (D T + lambda_max(M_L)) b_lo <= A <= b_hi``, ``h1 <= H <= h2``, ``c = 1 / (kappa
         h2)`` (``y.u = v^T (T K')^-1 v >= v^T M_L'^-1 v`` with ``v = T K' r^``, and ``|w|^2 =
-        v^T M^-1 N M^-1 v <= h2 kappa v^T M_L'^-1 v``, ``kappa >= lambda_max(M^-1 M_L')``)."""
+        v^T M^-1 N M^-1 v <= h2 kappa v^T M_L'^-1 v``, ``kappa >= lambda_max(M^-1 M_L')``).
+
+        ``M_L' = M_L(q^)`` is the law's bound at the predicted position, ``N``, ``M`` at the
+        sample's: ``M_L(q) <= N(q)`` and ``M_L(q) <= M(q)`` hold exactly at one point (the
+        nominal model and the plant are in the box), and ``M_L(q^) <= (1 + eta) M_L(q)`` with
+        ``eta <= ||q^ - q|| ||dM_L/dq||`` (the predicted position's error), so ``b_hi`` and
+        ``kappa`` are also at most ``1 + eta``: the smaller is kept (the cell's enclosures
+        cross its whole region, whose relative radii can exceed that by far)."""
         step = D * T
         floor_gain = step / (step + q["law_lam_max"])  # T K' >= D T / (D T + lambda_max) M_L
-        coupling = 1.0 / (p["kappa"] * p["h2"])
+        Kr_max = float(self.Kr.max())
+        r_max, tube = q["r_max"], q["tube"]
+        J = float(np.max(q["jerk"]))
+        eta = position_error(T, Kr_max, r_max, r_max + Kr_max * tube, J) * q["law_slope_norm"]
+        near = 1.0 + eta * (1 + 1e-12)
+        kappa = np.minimum(p["kappa"], near)
+        coupling = 1.0 / (kappa * p["h2"])
         with np.errstate(invalid="ignore"):
             return SectorRanges(
                 float(np.min(floor_gain * q["law_over_nominal_low"])),
-                float(np.max(q["law_over_nominal_high"])),
+                float(np.max(np.minimum(q["law_over_nominal_high"], near))),
                 float(np.min(p["h1"])),
                 float(np.max(p["h2"])),
                 float(np.min(coupling)),
