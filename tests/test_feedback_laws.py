@@ -29,8 +29,8 @@ GAINS = (1.0, 50.0, 5e3, 1e6, 1e9)  # [N m s/rad]
 
 def test_each_feedback_law_on_one_joint_is_its_closed_form(tmp_path):
     """Continuous and held: ``D r``; implicit: ``D m_L r / (m_L + D T)`` with the cart's sound
-    lower mass ``0 < m_L <= 0.8 * 2 kg`` (the box's lightest cart), never above the dead-beat
-    ``m_L r / T``."""
+    lower mass ``0 < m_L <= 0.8 * 2 kg`` (the box's lightest cart) and ``D`` capped at
+    ``phi_max``, never above the dead-beat ``m_L r / T``."""
     (tmp_path / "slider.urdf").write_text(SLIDER)
     robot = urpc.load_robot(tmp_path / "slider.urdf")
     box = urpc.parse_uncertainty({"links": {"cart": {"mass": "20%"}}}, robot)
@@ -58,9 +58,10 @@ def test_each_feedback_law_on_one_joint_is_its_closed_form(tmp_path):
         for law in ("continuous", "paper"):
             np.testing.assert_array_equal(laws[law].feedback.torque(q, gain, r), gain * r)
         torque = implicit.feedback.torque(q, gain, r)
+        D = min(gain, implicit.phi_max)
         # The Cholesky form D (r - D T y) loses the digits of (m_L + D T) / m_L to cancellation.
-        rtol = 1e-14 * (1 + gain * T / m_L)
-        np.testing.assert_allclose(torque, gain * m_L * r / (m_L + gain * T), rtol=rtol)
+        rtol = 1e-14 * (1 + D * T / m_L)
+        np.testing.assert_allclose(torque, D * m_L * r / (m_L + D * T), rtol=rtol)
         assert abs(torque[0]) <= m_L * abs(r[0]) / T * (1 + 1e-12)
     # Only the implicit law stops the adaptation, at its ceiling.
     assert laws["continuous"].phi_max == laws["paper"].phi_max == math.inf
@@ -68,8 +69,9 @@ def test_each_feedback_law_on_one_joint_is_its_closed_form(tmp_path):
 
 
 def test_the_implicit_feedback_acts_per_mode_of_the_lower_inertia(rr, rr_box):
-    """``K = D (M_L + D T)^-1 M_L`` (column by column) has the eigenvectors of ``M_L(q)`` and
-    the eigenvalues ``D lambda / (lambda + D T)``, never above the dead-beat ``lambda / T``."""
+    """``K = D (M_L + D T)^-1 M_L`` (column by column, ``D`` capped at ``phi_max``) has the
+    eigenvectors of ``M_L(q)`` and the eigenvalues ``D lambda / (lambda + D T)``, never above the
+    dead-beat ``lambda / T``."""
     T = 1e-3
     controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=T)
     rng = np.random.default_rng(1)
@@ -79,9 +81,10 @@ def test_the_implicit_feedback_acts_per_mode_of_the_lower_inertia(rr, rr_box):
         assert eigenvalues[0] > 0
         for gain in GAINS:
             K = np.column_stack([controller.feedback.torque(q, gain, e) for e in np.eye(2)])
-            modes = gain * eigenvalues / (eigenvalues + gain * T)
+            D = min(gain, controller.phi_max)
+            modes = D * eigenvalues / (eigenvalues + D * T)
             np.testing.assert_allclose(
-                vectors.T @ K @ vectors, np.diag(modes), rtol=1e-8, atol=1e-9 * gain * T
+                vectors.T @ K @ vectors, np.diag(modes), rtol=1e-8, atol=1e-9 * D * T
             )
             assert np.linalg.eigvalsh(K + K.T).max() / 2 <= eigenvalues[-1] / T * (1 + 1e-9)
 
