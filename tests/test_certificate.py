@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 import urpc
 from urpc.control.cells import CellFloor
 from urpc.control.certificate import DELAY_CONDITION, certify
+from urpc.control.certificate_report import EFFORT_CONDITION
 from urpc.trajectories import PaperTrajectory, SinusoidTrajectory, generic_trajectory
 
 DURATION = 3.0
@@ -288,6 +289,61 @@ def test_a_torque_bound_above_the_effort_names_the_period_that_keeps_it_within(r
     again = certify(shorter, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
     assert again.certified and again.figures["torques_within_limits"] is True, again.summary()
     assert max(again.figures["torque_bound"]) <= 1000.0
+
+
+def test_require_efforts_refuses_a_torque_bound_above_the_effort_and_names_a_period_within(
+    rr, rr_box
+):
+    """With ``require_efforts`` the bound of the commanded torque is a condition: the paper's
+    arm at 1 kHz (joint 1's bound above its 1000 N m effort) is not certified, and its largest
+    period becomes one where the bound is within. A certificate computed from scratch at that
+    period agrees. The default verdict of the same configuration is unchanged."""
+    controller = urpc.synthesize(rr, rr_box, 1e-2, sample_period=1e-3, Kr=30.0)
+    plain = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
+    strict = certify(
+        controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0, require_efforts=True
+    )
+    assert plain.certified and not strict.certified, strict.summary()
+    assert [c.name for c in strict.failed] == [EFFORT_CONDITION]
+    ratio = max(np.array(strict.figures["torque_bound"]) / rr.effort_limit)
+    assert strict.failed[0].value == pytest.approx(ratio) and ratio > 1.0
+    period = strict.max_sample_period
+    assert 1e-4 < period < 1e-3 < plain.max_sample_period, strict.summary()
+    assert strict.figures["advice"].startswith(
+        f"to certify within the effort limits: shorten the period to {period * 1e3:.3g} ms"
+    )
+    shorter = urpc.synthesize(rr, rr_box, 1e-2, sample_period=period, Kr=30.0)
+    again = certify(
+        shorter, PaperTrajectory(), duration=4.0, disturbance_bound=10.0, require_efforts=True
+    )
+    assert again.certified and again.max_sample_period >= period, again.summary()
+    assert max(again.figures["torque_bound"]) <= 1000.0
+    assert "effort limits not proven" not in again.summary()
+
+
+def test_require_efforts_without_a_torque_bound_or_without_limits(rr, rr_box, tmp_path):
+    """The continuous-time theorems bound no commanded torque, so ``require_efforts`` fails
+    them; a robot whose URDF states no effort limits has nothing to clip: the condition holds
+    and the verdict is the default one."""
+    continuous = urpc.synthesize(rr, rr_box, 1e-2)
+    verdict = certify(
+        continuous, PaperTrajectory(), duration=4.0, disturbance_bound=10.0, require_efforts=True
+    )
+    assert not verdict.certified and [c.name for c in verdict.failed] == [EFFORT_CONDITION]
+    assert "continuous-time theorems assume an unclipped torque" in verdict.failed[0].explanation
+    urdf = tmp_path / "rr_free.urdf"
+    urdf.write_text(rr.urdf_path.read_text().replace('effort="1000"', 'effort="0"'))
+    free = urpc.load_robot(urdf)
+    free_box = urpc.load_uncertainty(rr_box.source, free)
+    controller = urpc.synthesize(free, free_box, 1e-2, sample_period=1e-3, Kr=30.0)
+    strict = certify(
+        controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0, require_efforts=True
+    )
+    plain = certify(controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0)
+    assert strict.certified and plain.certified, strict.summary()
+    assert strict.max_sample_period == plain.max_sample_period
+    (effort,) = [c for c in strict.conditions if c.name == EFFORT_CONDITION]
+    assert effort.holds and "no effort limits" in effort.explanation
 
 
 @pytest.mark.parametrize(

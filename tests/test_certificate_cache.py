@@ -54,7 +54,8 @@ def _call(function, configuration, **kwargs):
     c = configuration
     return function(
         c["controller"], c["trajectory"], duration=c["duration"],
-        disturbance_bound=c["disturbance_bound"], cells=c.get("cells"), **kwargs,
+        disturbance_bound=c["disturbance_bound"], cells=c.get("cells"),
+        **({"require_efforts": True} if c.get("require_efforts") else {}), **kwargs,
     )  # fmt: skip
 
 
@@ -160,6 +161,7 @@ def _variants(rr, rr_box, tmp_path):
         "duration": {"duration": DURATION + 0.05},
         "disturbance": {"disturbance_bound": 9.0},
         "cells": {"cells": 20},
+        "require_efforts": {"require_efforts": True},
     }
 
 

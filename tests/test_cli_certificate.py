@@ -194,6 +194,26 @@ def test_certify_cells_reach_the_certificate_and_its_cache_key(capsys, counted, 
     assert code == 2 and not out and err.count("\n") == 1 and "--cells" in err
 
 
+def test_certify_require_efforts_adds_the_condition_and_is_a_configuration_of_its_own(
+    capsys, counted
+):
+    """``--require-efforts`` puts the torque-within-efforts condition into the verdict (its
+    value is the bound over the effort, the figures' ratio) and is cached apart from the
+    default verdict, which has no such condition."""
+    from urpc.control.certificate_report import EFFORT_CONDITION
+
+    code, out, _ = _run(capsys, *CERTIFY, "--require-efforts", "--json")
+    assert code == 0 and len(counted) == 1
+    data = json.loads(out)
+    (condition,) = [c for c in data["conditions"] if c["name"] == EFFORT_CONDITION]
+    ratio = max(b / 1000.0 for b in data["figures"]["torque_bound"])  # the RR arm's efforts
+    assert condition["value"] == pytest.approx(ratio)
+    assert condition["holds"] == (ratio <= 1.0) and data["certified"] <= condition["holds"]
+    code, out, _ = _run(capsys, *CERTIFY, "--json")
+    assert code == 0 and len(counted) == 2  # not the cached strict verdict
+    assert all(c["name"] != EFFORT_CONDITION for c in json.loads(out)["conditions"])
+
+
 def test_an_unusable_cache_gives_one_warning_and_the_run_goes_on(
     capsys, counted, tmp_path, monkeypatch
 ):

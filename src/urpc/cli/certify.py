@@ -53,6 +53,15 @@ def register(commands) -> None:
         "inertia models over each, which an impractical period's advice asks for on long or "
         "light-wristed arms, at a cost about proportional",
     )
+    p.add_argument(
+        "--require-efforts",
+        action="store_true",
+        help="for an arm whose drives clip at the URDF's effort limits (a clipped torque voids "
+        "the argument): certified only if the bound of the commanded torque is within every "
+        "joint's effort, and the max sample period is one where it is. Default: the bound is "
+        "reported against the efforts and the verdict assumes an unclipped torque, as the "
+        "paper's theorems do",
+    )
     add_json_argument(p)
     add_certificate_arguments(p, skippable=False)
     add_progress_argument(p, "no progress line (shown only when stderr is a terminal)")
@@ -72,6 +81,7 @@ def run_certify(args) -> int:
             controller or build_controller(setup, "interval"),
             refresh=args.no_cache,
             cells=args.cells,
+            require_efforts=args.require_efforts,
             progress=certificate_progress(args, setup.robot.dof),
             announce=False,  # the last line of the output says it
         )

@@ -27,6 +27,7 @@ ends below ``max(epsilon, epsilon_floor)``; the configuration is certified when
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -41,7 +42,7 @@ from ..wording import count
 from .argument import Condition
 from .base import actuation_delay_of
 from .cells import CellFloor
-from .certificate_report import reference_torque
+from .certificate_report import EFFORT_CONDITION, effort_limits, reference_torque
 from .interval import IntervalPassivityController
 
 #: Version of the argument and of the :class:`Certificate` it returns. Bump it whenever a change
@@ -155,6 +156,7 @@ def certify(
     disturbance_bound: float | None = None,
     cells: int | None = None,
     actuation_delay: int | None = None,
+    require_efforts: bool = False,
     progress: Callable[[str], Any] | None = None,
 ) -> Certificate:
     """The certificate of ``controller`` tracking ``trajectory`` over ``[0, duration]`` [s].
@@ -176,6 +178,11 @@ def certify(
             the period of its own sample: any delay, the law's or the plant's, fails the
             condition "actuation delay counted by the argument" (the floor and the largest
             period are still reported: they are the undelayed loop's).
+        require_efforts: Make the commanded torque's bound within the URDF's effort limits a
+            condition (for a robot whose drives clip there: a clipped torque voids the
+            argument), and shorten ``max_sample_period`` to a period where it holds. By default
+            the bound is reported (``torque_bound``, ``torques_within_limits``, the summary's
+            note) and the verdict assumes an unclipped torque, as the paper's theorems do.
         progress: Called with one short line as each stage of the sampled-data search starts
             (``"enclosing 236 cells (||e|| <= 0.01, ||r|| <= 0.45)"``), or ``None``.
     """
@@ -242,7 +249,7 @@ def certify(
     # Overflow and nan in an enclosure (a tube of 1e300 rad, a vacuous box) come out as inf or nan
     # quantities, which fail their conditions; numpy's warnings about them would only be noise.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        argument = law.argument(controller, floor_of, d, progress)
+        argument = law.argument(controller, floor_of, d, progress, require_efforts)
     reference = reference_torque(controller, trajectory, floor_of.span)
     if reference is not None:
         conditions.append(reference)
@@ -251,6 +258,18 @@ def certify(
     fixed = [c for c in conditions if not c.holds and c.name != DELAY_CONDITION]
     max_period = 0.0 if fixed else argument.max_sample_period
     conditions += argument.conditions
+    required = require_efforts and bool(np.any(effort_limits(controller.robot)[1]))
+    if required and not any(c.name == EFFORT_CONDITION for c in argument.conditions):
+        conditions.append(
+            Condition(
+                EFFORT_CONDITION, False, math.inf, 1.0,
+                "this argument bounds no commanded torque ("
+                + ("the continuous-time theorems assume an unclipped torque"
+                   if controller.sample_period is None
+                   else "no finite floor, so no regime to bound it in")
+                + "): the sampled implicit law's certificate bounds it",
+            )
+        )  # fmt: skip
     floor, figures = argument.floor, argument.figures
     holds = all(c.holds for c in conditions) and floor <= controller.epsilon
     if not holds:
@@ -260,6 +279,10 @@ def certify(
                 f"no period or epsilon certifies this configuration: '{fixed[0].name}' fails "
                 f"whatever the period ({fixed[0].explanation})"
             )
+        effort = next((c for c in argument.conditions if c.name == EFFORT_CONDITION), None)
+        others = [c for c in conditions if not c.holds and c.name != EFFORT_CONDITION]
+        if effort is not None and not effort.holds and not others and floor <= controller.epsilon:
+            note = "to certify within the effort limits: " + figures["effort_fix"]
         if note is not None:
             figures["advice"] = note
         if delay:  # no period or epsilon makes up for a delay the argument does not count

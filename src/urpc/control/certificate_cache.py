@@ -210,6 +210,7 @@ def cached_certify(
     disturbance_bound: float | None = None,
     cells: int | None = None,
     actuation_delay: int | None = None,
+    require_efforts: bool = False,
     progress: Callable[[str], Any] | None = None,
     cache: bool | CertificateCache = True,
     refresh: bool = False,
@@ -219,7 +220,7 @@ def cached_certify(
 
     Args:
         controller, trajectory, duration, disturbance_bound, cells, actuation_delay,
-            progress: As for
+            require_efforts, progress: As for
             :func:`~urpc.control.certificate.certify`.
         cache: ``True`` for the default folder (:func:`default_directory`), a
             :class:`CertificateCache`, or ``False``: computed, nothing read or written.
@@ -234,6 +235,7 @@ def cached_certify(
         "disturbance_bound": disturbance_bound,
         "cells": cells,
         "actuation_delay": actuation_delay,
+        "require_efforts": bool(require_efforts),
     }
     store = None
     if cache is True:

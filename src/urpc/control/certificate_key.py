@@ -16,8 +16,9 @@ The key hashes one canonical document of:
   ``kappa_P``, ``kappa_I``, ``phi_P``, ``phi_I``, the ceiling ``phi_max``), the bound method, and
   the inertia bounds of the implicit law (their two model copies, scale and eigenvalue ceiling);
 * **the reference**: its class and :meth:`~urpc.trajectories.Trajectory.fingerprint`;
-* the **duration**, the **disturbance bound**, the number of **cells** asked for and the
-  plant's **actuation delay** (resolved: ``None`` counts as the law's own delay).
+* the **duration**, the **disturbance bound**, the number of **cells** asked for, the
+  plant's **actuation delay** (resolved: ``None`` counts as the law's own delay) and, when
+  asked for, **require_efforts** (absent from the default verdict's document).
 
 Floats enter by their exact bits (``float.hex``), arrays by dtype, shape and a sha256 of their
 bytes. A reference whose class gives no fingerprint (the base class's ``None``, or one inherited
@@ -58,9 +59,11 @@ def certificate_key(
     disturbance_bound: float | None = None,
     cells: int | None = None,
     actuation_delay: int | None = None,
+    require_efforts: bool = False,
 ) -> str:
     """The sha256 (64 hex digits) of everything ``certify(controller, trajectory, duration=...,
-    disturbance_bound=..., cells=..., actuation_delay=...)`` depends on (module docstring).
+    disturbance_bound=..., cells=..., actuation_delay=..., require_efforts=...)`` depends on
+    (module docstring).
 
     Raises:
         NoKey: the reference gives no fingerprint.
@@ -68,6 +71,8 @@ def certificate_key(
     document = key_document(
         controller, trajectory, duration, disturbance_bound, cells, actuation_delay
     )
+    if require_efforts:  # absent otherwise: the keys of the default verdict stay as they were
+        document["require_efforts"] = True
     text = json.dumps(document, sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(text.encode()).hexdigest()
 

@@ -53,12 +53,92 @@ def torque_figures(search, controller, d: float, quantities: dict, parts: dict) 
             change = f"not proven within them down to T = {T * TORQUE_PERIODS[-1]:.3g} s"
         out["torques_within_limits"] = False
         out["torque_period"] = within
+        if j is not None:
+            out["torque_fix"] = change
         out["torque_note"] = (
             f"torques within the effort limits not proven: joint '{joint}' bound "
             f"{bound[worst]:.4g} N m > effort {effort[worst]:.4g} N m (the argument assumes an "
             f"unclipped torque); {change}"
         )
     return out
+
+
+#: The condition :func:`effort_condition` adds when ``certify(..., require_efforts=True)``.
+EFFORT_CONDITION = "commanded torque within the effort limits"
+
+
+def effort_condition(
+    search, controller, figures: dict, quantity_sets: list, max_period: float
+) -> tuple[Condition, float]:
+    """The condition that the commanded torque's bound (:func:`torque_figures`, already in
+    ``figures``) is within every limited joint's effort at the controller's period, and the
+    largest period that is both certified and within the efforts: ``max_period`` itself when
+    its bound is, else the longest of ``max_period 0.9^k`` and ``T`` that is (each judged on its
+    own, with any of ``quantity_sets``: the enclosures of the search's partitions, all sound up
+    to twice the period), 0 when none is. Robots without effort limits: the condition holds.
+    When it fails, ``figures["effort_fix"]`` says what would make it hold."""
+    T = controller.sample_period
+    effort, limited = effort_limits(controller.robot)
+    if not np.any(limited):
+        return (
+            Condition(
+                EFFORT_CONDITION, True, 0.0, 1.0,
+                "the robot has no effort limits (none in its URDF): nothing clips the torque",
+            ),
+            max_period,
+        )  # fmt: skip
+    bound = np.asarray(figures["torque_bound"], dtype=float)
+    ratio = float(np.max(bound[limited] / effort[limited]))
+    holds = bool(figures["torques_within_limits"])
+    candidates = sorted(
+        {max_period * 0.9**k for k in range(len(TORQUE_PERIODS) + 1)}
+        | ({T} if T <= max_period else set()),
+        reverse=True,
+    )
+    within = 0.0
+    if max_period > 0:
+        within = next(
+            (
+                period for period in candidates
+                if any(_within_at(search, q, period, effort, limited) for q in quantity_sets)
+            ),
+            0.0,
+        )  # fmt: skip
+    if holds:
+        explanation = (
+            "the commanded torque's bound in the floor's regime is within every joint's effort "
+            f"(at most {ratio:.3g} of it)"
+        )
+    else:
+        joint = controller.robot.joint_names[most_exceeded(bound, effort, limited)]
+        fix = (
+            f"shorten the period to {within * 1e3:.3g} ms (certified within the efforts there)"
+            if within > 0
+            else figures.get(
+                "torque_fix",
+                f"no certified period down to {max_period * TORQUE_PERIODS[-1] * 1e3:.3g} ms "
+                "is proven within them (a smaller epsilon or Kr, a narrower box or a gentler "
+                "reference lowers the bound)"
+                if max_period > 0
+                else "no period is certified",
+            )
+        )
+        explanation = (
+            f"joint '{joint}' may be commanded {ratio:.3g} times its effort (the bound in the "
+            f"floor's regime): a clipped torque voids the argument; {fix}"
+        )
+        figures["effort_fix"] = fix
+    return Condition(EFFORT_CONDITION, holds, ratio, 1.0, explanation), within
+
+
+def _within_at(search, quantities: dict, period: float, effort, limited) -> bool:
+    """Certified at ``period`` on ``quantities`` (floor at most epsilon in a consistent tube)
+    with every limited joint's torque bound within its effort."""
+    floor, parts, rho = search.least_tube(quantities, period)
+    if not (floor <= search.epsilon and parts.get("r_sup", math.inf) <= quantities["r_max"]):
+        return False
+    bound = search.bound.torque_bound(period, search.d, quantities, rho, parts["r_sup"])
+    return bool(np.all(bound[limited] <= effort[limited]))
 
 
 #: The periods :func:`torque_period` tries, as fractions of the controller's period.
@@ -71,14 +151,9 @@ def torque_period(search, quantities: dict, effort: np.ndarray, limited: np.ndar
     tube) with every limited joint's torque bound within its effort [s]; 0 when none is. Each
     period is judged on its own with the enclosures of the floor (they hold up to twice the
     period): sound for the period returned, whether or not the bound falls monotonically."""
-    T, d, epsilon = search.T, search.d, search.epsilon
     for fraction in TORQUE_PERIODS:
-        period = T * fraction
-        floor, parts, rho = search.least_tube(quantities, period)
-        if not (floor <= epsilon and parts.get("r_sup", math.inf) <= quantities["r_max"]):
-            continue
-        bound = search.bound.torque_bound(period, d, quantities, rho, parts["r_sup"])
-        if np.all(bound[limited] <= effort[limited]):
+        period = search.T * fraction
+        if _within_at(search, quantities, period, effort, limited):
             return float(period)
     return 0.0
 

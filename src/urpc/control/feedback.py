@@ -74,9 +74,12 @@ class FeedbackLaw(ABC):
         floor_of: CellFloor,
         d: float | None,
         progress: Callable[[str], Any] | None,
+        require_efforts: bool = False,
     ) -> LawArgument:
         """The law's part of the certificate of ``controller`` over the cells of ``floor_of``
-        with the disturbance bound ``d`` [N m] (``None``: unknown)."""
+        with the disturbance bound ``d`` [N m] (``None``: unknown); with ``require_efforts``,
+        a law that bounds its commanded torque adds the condition that the bound is within the
+        effort limits (and shortens its largest period to one where it is)."""
 
     def advice(self, controller: IntervalPassivityController, argument: LawArgument) -> str | None:
         """What would certify a configuration that is not certified (none by default)."""
@@ -89,7 +92,7 @@ class ContinuousFeedback(FeedbackLaw):
 
     name = "continuous"
 
-    def argument(self, controller, floor_of, d, progress):
+    def argument(self, controller, floor_of, d, progress, require_efforts=False):
         figures = floor_of.inertia_figures(0.0)
         floor, conditions = controller.gain_law.continuous_time_bound(
             figures["lambda_L"], figures["lambda_U"], controller.Kr, controller.epsilon
@@ -133,7 +136,7 @@ class HeldFeedback(FeedbackLaw):
     def __init__(self, sample_period: float):
         self.sample_period = sample_period
 
-    def argument(self, controller, floor_of, d, progress):
+    def argument(self, controller, floor_of, d, progress, require_efforts=False):
         T = self.sample_period
         figures = floor_of.inertia_figures(T)
         limit = 2.0 * figures["lambda_L"] / T
@@ -195,8 +198,8 @@ class ImplicitFeedback(FeedbackLaw):
         T = self.sample_period if period is None else period
         return max(phi_P, PHI_MAX_FACTOR * self.inertia_bounds.max_upper_eigenvalue / T)
 
-    def argument(self, controller, floor_of, d, progress):
-        from .certificate_report import torque_figures
+    def argument(self, controller, floor_of, d, progress, require_efforts=False):
+        from .certificate_report import effort_condition, torque_figures
         from .sampled_search import SampledSearch
 
         conditions = []
@@ -223,6 +226,12 @@ class ImplicitFeedback(FeedbackLaw):
         figures.update(search.report(floor, parts, quantities))
         if math.isfinite(floor):
             figures.update(torque_figures(search, controller, d, quantities, parts))
+            if require_efforts:
+                partitions = [q for q in (search.refined, quantities) if q is not None]
+                effort, max_period = effort_condition(
+                    search, controller, figures, partitions, max_period
+                )
+                conditions.append(effort)
         conditions += _sampled_conditions(
             figures, floor, controller.epsilon, max_period, controller.adaptive,
             bool(controller.delay),

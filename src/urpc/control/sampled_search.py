@@ -281,6 +281,12 @@ class SampledSearch:
         self._refined = quantities
         return best
 
+    @property
+    def refined(self) -> dict | None:
+        """The quantities of the partition the period search left (``None`` before it ran or
+        when it split nothing new); sound, like every partition, up to twice the period."""
+        return self._refined
+
     def reconcile(
         self, floor: float, parts: dict, quantities: dict, max_period: float
     ) -> tuple[float, dict, dict, float]:

@@ -71,6 +71,7 @@ def cached_setup(
     cache: bool | CertificateCache = True,
     refresh: bool = False,
     cells: int | None = None,
+    require_efforts: bool = False,
     progress: Any = None,
     announce: bool = True,
 ) -> CachedCertificate:
@@ -83,6 +84,8 @@ def cached_setup(
         refresh: Compute even when cached, and replace the record.
         cells: The first cells of time (:func:`urpc.control.certificate.certify`; default
             chosen from the reference's speed).
+        require_efforts: The commanded torque within the effort limits as a condition
+            (:func:`urpc.control.certificate.certify`).
         progress: ``True`` for a status line on stderr while it runs and one closing line
             (``certificate: computed in 2.1 s, ...``); a callable receiving those lines; ``None``.
         announce: Give ``progress`` the closing line (a command that prints it in its own
@@ -105,6 +108,7 @@ def cached_setup(
             disturbance_bound=scenario.disturbance,
             actuation_delay=scenario.actuation_delay,
             cells=cells,
+            require_efforts=require_efforts,
             progress=report.stage if report.active else None,
             cache=cache,
             refresh=refresh,
