@@ -22,9 +22,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import urpc
-from urpc.control.cells import CellFloor
+from urpc.control.cells import CellFloor, plant_torque
 from urpc.control.certificate import DELAY_CONDITION, certify
 from urpc.control.certificate_report import EFFORT_CONDITION
+from urpc.identify.simulated import plant_torques
 from urpc.trajectories import PaperTrajectory, SinusoidTrajectory, generic_trajectory
 
 DURATION = 3.0
@@ -82,6 +83,11 @@ def _check_cells_hold_points(robot, box, controller, trajectory, duration, tube,
             - nominal.M(q) @ qdd_a - nominal.C(q, qd_a) @ qd_a - nominal.g(q)
         )  # fmt: skip
         M_law = law.M(q)
+        # The plant's own torque at r = 0 (rigid bodies and drives) within the cell's bound over
+        # the tube of this very ||e|| (the torque bound takes it over the regime's tube).
+        own = plant_torques(plant, q, qd_a, qdd_a)[0]
+        bound = plant_torque(quantities, float(np.linalg.norm(e)))[cell]
+        assert np.all(np.abs(own) <= bound * (1 + 1e-9)), (t, cell, own, bound)
         _check_delayed_quantities(
             quantities, cell, trajectory, (starts[cell], ends[cell] + 2 * T), tube, q, qd_a, e,
             nominal_robot=controller.robot, law=law, Kr=Kr, rng=rng,
@@ -396,9 +402,35 @@ def test_the_floor_bounds_sampled_ur5_plants_under_the_worst_disturbance(ur5):
         final = result.t >= result.t[-1] - 0.5
         bound = np.array(certificate.figures["torque_bound"])
         assert np.all(np.abs(result.torque[final]).max(axis=0) <= bound), k
-    # No period helps: the plant's own torque along the reference exceeds the shoulder's effort.
+    # The shoulder's bound (197.6 N m) stays above its 150 N m effort down to a tenth of the
+    # period: no shorter period is named.
     assert certificate.figures["torque_period"] == 0.0
-    assert "no period brings it within" in certificate.summary()
+    assert "not proven within them down to T = " in certificate.summary()
+
+
+def test_a_reference_whose_own_torque_bound_exceeds_the_effort_names_no_period(
+    rr, rr_box, tmp_path
+):
+    """When the plant's own torque along the reference (e = 0, enclosed over the box and the
+    cells) exceeds a joint's effort, no period helps, and the certificate says so. The paper's
+    arm at 1 kHz with joint 1's effort at 387 N m: its reference needs 384.6 N m at the
+    heaviest sampled vertex (so the condition on the reference holds), and the enclosure over
+    the cells reaches 389.8 N m (386.5 N m on the finer cells of 0.1 ms)."""
+    urdf = tmp_path / "rr_387.urdf"
+    text = rr.urdf_path.read_text()
+    urdf.write_text(text.replace('effort="1000"', 'effort="387"', 1))
+    robot = urpc.load_robot(urdf)
+    assert robot.effort_limit[0] == 387.0 and robot.effort_limit[1] == 1000.0
+    box = urpc.load_uncertainty(rr_box.source, robot)
+    controller = urpc.synthesize(robot, box, 1e-2, sample_period=1e-3, Kr=30.0)
+    strict = certify(
+        controller, PaperTrajectory(), duration=4.0, disturbance_bound=10.0, require_efforts=True
+    )
+    (reference,) = [c for c in strict.conditions if "reference within" in c.name]
+    assert reference.holds and reference.value > 0.98, reference
+    assert strict.figures["torque_period"] == 0.0
+    assert strict.max_sample_period == 0.0 and not strict.certified
+    assert "no period brings it within" in strict.figures["advice"], strict.figures["advice"]
 
 
 def test_the_floor_bounds_panda_plants_where_several_light_modes_decide_the_response(panda):

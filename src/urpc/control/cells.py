@@ -302,12 +302,17 @@ class CellFloor:
             np.sum((np.abs(along_error.mid) + along_error.rad) ** 2, axis=1)
         )
         reference_velocity = self._states(batch, 0.0, 0.0, extension)[3]
-        # |tau_i| of every plant of the box at r = 0 over the tube (the rigid bodies by the
-        # regressor over the parameter hull, the tube by the Jacobian, the drives at their ends).
+        # |tau_i| of every plant of the box at r = 0 along the reference, and its growth per
+        # unit ||e|| over the tube (the rigid bodies by the regressor over the parameter hull,
+        # the tube by the Jacobian, the drives at their ends): plant_torque(quantities, rho).
         rigid = self._plant_set.magnitude(center)
         rigid_along = self._plant_set.magnitude(tube_jacobian)
-        plant_torque = rigid + tube * np.sqrt(np.sum(rigid_along**2, axis=1))
-        plant_torque = plant_torque + self.joints.plant_torque(qd_a, qdd_a)
+        reference_states = self._states(batch, 0.0, 0.0, extension)
+        plant_torque = rigid + self.joints.plant_torque(reference_states[1], reference_states[2])
+        plant_torque_per_error = np.sqrt(np.sum(rigid_along**2, axis=1))
+        plant_torque_per_error = plant_torque_per_error + self.joints.plant_torque_per_error(
+            self.Kr
+        )
         # The law's nominal torque at r != 0 differs from its value at r = 0 by
         # M0 Kr r - C0(q, r) qd_a = M0 Kr r - C0(q, qd_a) r (+ Ia0 Kr r): per joint at most
         # (Kr ||M0 e_i|| + ||row_i C0(q, qd_a)|| + Ia0_i Kr) ||r||, with
@@ -364,7 +369,8 @@ class CellFloor:
                 * (1 + LAPACK_MARGIN),
                 "law_lam_L": law.lam_min * (1 - law.eps) * (1 - LAPACK_MARGIN),
                 "law_inverse_diagonal": np.diagonal(law.inverse, axis1=-2, axis2=-1),
-                "plant_torque": plant_torque * (1 + 1e-12),
+                "plant_torque_reference": plant_torque * (1 + 1e-12),
+                "plant_torque_per_error": plant_torque_per_error * (1 + 1e-12),
                 "torque_per_r": per_r * (1 + 1e-12),
                 "nominal_lam_min": nominal.lam_min * (1 - eps0) * (1 - LAPACK_MARGIN),
                 "nominal_lam_max": nominal.lam_max * (1 + nominal.eps) * (1 + LAPACK_MARGIN),
@@ -587,3 +593,13 @@ class CellFloor:
             "beta": float(min(np.min(p["beta"]) for p in pieces)),
             "nu": float(max(np.max(p["nu"]) for p in pieces)),
         }
+
+
+def plant_torque(quantities: dict, tube: float) -> np.ndarray:
+    """``|tau_i|`` [N m] of every plant of the box at ``r = 0`` over the tube ``||e|| <= tube``
+    (at most the enclosures' own tube), per cell and joint: the reference's part plus the
+    tube's, whose Jacobian is enclosed over the enclosures' tube (the mean value theorem)."""
+    if not tube <= quantities["tube"]:
+        raise ValueError(f"the tube {tube:g} is wider than the enclosures' {quantities['tube']:g}")
+    along, per_error = quantities["plant_torque_reference"], quantities["plant_torque_per_error"]
+    return (along + tube * per_error) * (1 + 1e-12)

@@ -63,7 +63,9 @@ from .interval import IntervalPassivityController
 #: 9: the inertia models' second-order terms (own boxes for the halves of failing cells, the
 #: structure of the second derivatives kept); beta at the cell's centre in the advice.
 #: 10: the delayed law certified behind its own one-sample delay (docs/sampled-data.md §7).
-CERTIFICATE_VERSION = 10
+#: 11: the torque bound's plant torque over the regime's tube, not the enclosures' (and
+#: ``require_efforts``).
+CERTIFICATE_VERSION = 11
 #: The condition on the delay: the law's must be the plant's actuation delay (0, or 1 for the
 #: delayed law, whose loop has its own argument).
 DELAY_CONDITION = "actuation delay counted by the argument"

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .argument import Condition
-from .cells import CellFloor
+from .cells import CellFloor, plant_torque
 from .interval import IntervalPassivityController
 
 
@@ -34,18 +34,17 @@ def torque_figures(search, controller, d: float, quantities: dict, parts: dict) 
     worst = most_exceeded(bound, effort, limited)
     if worst is not None:
         joint = controller.robot.joint_names[worst]
-        # The plant's own torque along the reference (over the box and the tube) does not
-        # shrink with the period: when it alone exceeds an effort, no period helps.
-        plant = np.max(quantities["plant_torque"], axis=0)
+        # The plant's own torque along the reference itself (e = 0, over the box) is part of
+        # the bound at every period: when it alone exceeds an effort, no period helps.
+        plant = np.max(plant_torque(quantities, 0.0), axis=0)
         j = most_exceeded(plant, effort, limited)
         within = 0.0 if j is not None else torque_period(search, quantities, effort, limited)
         if j is not None:
             change = (
                 f"no period brings it within: the plant's own torque along the reference, over "
-                f"the box and the tube ||e|| <= {quantities['tube']:g}, is already "
-                f"{plant[j]:.4g} N m on joint '{controller.robot.joint_names[j]}' (effort "
-                f"{effort[j]:.4g} N m; a narrower box, a smaller epsilon or Kr, or a gentler "
-                "reference lowers it)"
+                f"the box, is already {plant[j]:.4g} N m on joint "
+                f"'{controller.robot.joint_names[j]}' (effort {effort[j]:.4g} N m; a narrower "
+                "box or a gentler reference lowers it)"
             )
         elif within > 0:
             change = f"proven within them at T = {within:.3g} s"
@@ -73,7 +72,8 @@ def effort_condition(
     """The condition that the commanded torque's bound (:func:`torque_figures`, already in
     ``figures``) is within every limited joint's effort at the controller's period, and the
     largest period that is both certified and within the efforts: ``max_period`` itself when
-    its bound is, else the longest of ``max_period 0.9^k`` and ``T`` that is (each judged on its
+    its bound is, else the longest of ``max_period 0.9^k`` and ``T 0.9^k`` (``k >= 0``, those
+    of :func:`torque_period` among them) that is (each judged on its
     own, with any of ``quantity_sets``: the enclosures of the search's partitions, all sound up
     to twice the period), 0 when none is. Robots without effort limits: the condition holds.
     When it fails, ``figures["effort_fix"]`` says what would make it hold."""
@@ -90,9 +90,11 @@ def effort_condition(
     bound = np.asarray(figures["torque_bound"], dtype=float)
     ratio = float(np.max(bound[limited] / effort[limited]))
     holds = bool(figures["torques_within_limits"])
+    # The periods torque_period tries below T, too: the strict verdict never names a shorter
+    # period than the default one's note.
     candidates = sorted(
         {max_period * 0.9**k for k in range(len(TORQUE_PERIODS) + 1)}
-        | ({T} if T <= max_period else set()),
+        | {T * f for f in (1.0, *TORQUE_PERIODS) if T * f <= max_period},
         reverse=True,
     )
     within = 0.0

@@ -56,6 +56,7 @@ import math
 
 import numpy as np
 
+from .cells import plant_torque
 from .delay_form import CommonForm, SectorRanges, common_form
 from .period_bound import PeriodBound
 
@@ -341,7 +342,8 @@ class DelayedPeriodBound(PeriodBound):
         """Per joint, a bound [N m] of the delayed law's torque in the floor's regime. ``u_k =
         tau0(e', r') + (the law's reference) + K' r^`` with ``r^ = r^* + delta``: ``K' r^* =
         w0`` exactly, and ``tau0(e_k, 0) + w0`` is the plant's own torque at ``r = 0``
-        (``plant_torque``); ``tau0(e', 0) - tau0(e_k, 0)`` is at most ``||G pi0|| ||q^ -
+        (:func:`~urpc.control.cells.plant_torque` over the regime's tube ``||e_k|| <= tube``);
+        ``tau0(e', 0) - tau0(e_k, 0)`` is at most ``||G pi0|| ||q^ -
         q_k||``, ``tau0(e', r') - tau0(e', 0)`` at most ``torque_per_r ||r'||``, the law's
         reference ``||N e_i|| (Delta qdd_a + Gamma0 Delta v)`` (with ``N``'s change), and
         ``|e_i^T K' N^-1/2 delta_y| <= ((M_U)_ii b_hi)^1/2 |delta_y| / T``."""
@@ -368,7 +370,7 @@ class DelayedPeriodBound(PeriodBound):
             )
             feedback = np.sqrt(p["upper_diagonal"] * quantities["law_over_nominal_high"][:, None])
             piece = (
-                quantities["plant_torque"]
+                plant_torque(quantities, tube)
                 + (quantities["torque_per_error_N"] * quantities["nominal_lam_max"])[:, None]
                 * parts["dq"]
                 + quantities["torque_per_r"] * extent["r_sup"]

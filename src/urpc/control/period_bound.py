@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from .cells import CellFloor
+from .cells import CellFloor, plant_torque
 
 #: The cells within this fraction of a term's extreme are split (:meth:`PeriodBound.critical_cells`).
 CRITICAL_SHARE = 0.05
@@ -252,7 +252,8 @@ class PeriodBound:
         """Per joint, a bound [N m] of the torque the law commands once ``||e||`` is within the
         floor's regime (docs/sampled-data.md §3, "Torques"): with ``r = r* + r_d + delta`` (the
         dead-beat loop's ``r* = T M_L^-1 w`` and ``r_d``), ``tau0 + K r* = tau0 + w - (M_L - T
-        K) M_L^-1 w`` is the plant's own torque less at most ``sqrt(M_ii) g ||M_L^-1/2 w||``
+        K) M_L^-1 w`` is the plant's own torque over the regime's tube ``||e|| <= tube``
+        (:func:`~urpc.control.cells.plant_torque`) less at most ``sqrt(M_ii) g ||M_L^-1/2 w||``
         (``g = lambda_U / (D T)``), ``K r_d = sum_j M^1/2 A (1 - A_inf)^j M^-1/2 d_j`` is at most
         ``sqrt(M_ii) (S(a) + g / a) d / sqrt(lambda_L)`` with ``S(a) = sum_j max_{a <= x <= 1}
         x (1-x)^j``, and ``K delta = M^1/2 (A / T) M^1/2 delta`` at most ``sqrt(M_ii)
@@ -272,7 +273,7 @@ class PeriodBound:
             response = (response_sum(a) + change / a) * d / np.sqrt(p["lam_L"])
             mismatch = change * (p["RM"][0] + tube * p["RM"][1])  # >= g ||M_L^-1/2 w||
             piece = (
-                quantities["plant_torque"]
+                plant_torque(quantities, tube)
                 + quantities["torque_per_r"] * r_sup
                 + root * ((response + mismatch)[:, None] + delta_M / T)
             )

@@ -54,6 +54,15 @@ class JointTerms:
         upper = self.box.upper
         return upper[0] * qdd_a.val.magnitude + upper[1] * qd_a.val.magnitude + upper[2]
 
+    def plant_torque_per_error(self, Kr: np.ndarray) -> np.ndarray | float:
+        """How much :meth:`plant_torque` grows per unit ``||e||`` [N m/rad] at ``r = 0``, where
+        ``qd_a = qd_d + Kr e`` and ``qdd_a = qdd_d - Kr^2 e``: ``Ia Kr^2 + Dv Kr`` per joint
+        (exact: the magnitudes are affine in the tube's radius)."""
+        if self.box is None:
+            return 0.0
+        upper = self.box.upper
+        return upper[0] * Kr * Kr + upper[1] * Kr
+
     def nominal_torque_rate(self, qd_a: Jet, qdd_a: Jet) -> np.ndarray | float:
         """The rate [N m/s] of the nominal drives' torque ``Ia0 qdd_a + Dv0 qd_a``."""
         if self.box is None:
