@@ -210,6 +210,35 @@ def test_cells_hold_pinocchio_between_them_ur5(ur5):
     _check_cells_hold_points(ur5, box, controller, trajectory, 2.0, 0.005, rng, 60)
 
 
+def test_the_plant_torque_holds_pinocchio_with_the_drives_over_the_regime_tube(ur5):
+    """The plant's own torque at r = 0 (:func:`~urpc.control.cells.plant_torque`) with the
+    UR5's joint-friction box: rigid bodies (Pinocchio's inverse dynamics with the armature) and
+    drives (damping, Coulomb friction) of random plants of the box, at random (t, e) with the
+    tube taken at ||e|| itself, within the cell's bound. The drives' slope adds at most 7 N m
+    at ||e|| = 0.01, within the rigid part's slack: this checks soundness with the drives, not
+    the slope's sharpness (the rigid part's is checked by _check_cells_hold_points)."""
+    box = urpc.load_uncertainty("ur5/uncertainty_joint_friction", ur5)
+    assert box.joints is not None
+    controller = urpc.synthesize(ur5, box, 1e-2, sample_period=1e-4)
+    trajectory = generic_trajectory(box.nominal_robot(ur5))
+    floor_of = CellFloor(controller, trajectory, 2.0, cells=24)
+    tube, T = 0.01, controller.sample_period
+    quantities = floor_of.quantities(tube, 0.1, 2 * T)
+    starts, ends = floor_of.spans()
+    Kr, rng = controller.Kr, np.random.default_rng(5)
+    for _ in range(40):
+        cell = int(rng.integers(floor_of.cells))
+        t = rng.uniform(starts[cell], ends[cell] + 2 * T)
+        direction = rng.standard_normal(ur5.dof)
+        e = direction / np.linalg.norm(direction) * tube * rng.uniform(0.5, 1.0)
+        reference = trajectory.reference(t)
+        q, qd_a, qdd_a = reference.q - e, reference.qd + Kr * e, reference.qdd - Kr * Kr * e
+        plant = box.plant(ur5, box.vertex(int(rng.integers(2**box.n_uncertain))))
+        own = np.abs(plant_torques(plant, q, qd_a, qdd_a)[0])
+        bound = plant_torque(quantities, float(np.linalg.norm(e)))[cell]
+        assert np.all(own <= bound * (1 + 1e-9)), (t, cell, own, bound)
+
+
 @settings(
     max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
