@@ -272,7 +272,10 @@ class CellFloor:
             return self._tube_cache[key]
         cells = len(batch)
         q, qd_a, qdd_a, _ = self._states(batch, tube, 0.0, extension)
-        reference_q = self._states(batch, 0.0, 0.0, extension)[0].val
+        # The reference's own states (e = 0, r = 0): its positions, velocity box, jerk, and the
+        # plant's torque along it.
+        reference_states = self._states(batch, 0.0, 0.0, extension)
+        reference_q = reference_states[0].val
         models, model_slopes = self._batch_models(batch, index, tube, extension)
         nominal, law = models[0], models[1]
         # d/dt w = (rate along the reference at a fixed e) + (Jacobian along e) ed.
@@ -301,13 +304,12 @@ class CellFloor:
         torque_per_error_rate = np.sqrt(
             np.sum((np.abs(along_error.mid) + along_error.rad) ** 2, axis=1)
         )
-        reference_velocity = self._states(batch, 0.0, 0.0, extension)[3]
+        reference_velocity = reference_states[3]
         # |tau_i| of every plant of the box at r = 0 along the reference, and its growth per
         # unit ||e|| over the tube (the rigid bodies by the regressor over the parameter hull,
         # the tube by the Jacobian, the drives at their ends): plant_torque(quantities, rho).
         rigid = self._plant_set.magnitude(center)
         rigid_along = self._plant_set.magnitude(tube_jacobian)
-        reference_states = self._states(batch, 0.0, 0.0, extension)
         plant_torque = rigid + self.joints.plant_torque(reference_states[1], reference_states[2])
         plant_torque_per_error = np.sqrt(np.sum(rigid_along**2, axis=1))
         plant_torque_per_error = plant_torque_per_error + self.joints.plant_torque_per_error(
@@ -334,7 +336,7 @@ class CellFloor:
         eps0 = np.minimum(nominal.eps, 0.999999)
         eps_law = np.minimum(law.eps, 0.999999)
         law_over_nominal = np.linalg.eigvalsh(congruence(nominal.inverse_factor, law.center))
-        jerk = self._states(batch, 0.0, 0.0, extension)[2].dot.rad
+        jerk = reference_states[2].dot.rad
         # ||M0^-1/2 (G pi0) M0^-1/2|| through the nominal centre's factor P0 (the Jacobian's
         # ball and the products' rounding entrywise), over the cell: / (1 - eps0).
         P0 = nominal.inverse_factor
